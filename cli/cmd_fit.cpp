@@ -1,0 +1,146 @@
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "brakefit/version.hpp"
+#include "cli/commands.hpp"
+#include "cli/io.hpp"
+#include "core/curve_csv.hpp"
+#include "core/plot/charts.hpp"
+
+namespace brakefit::cli {
+
+namespace {
+
+nlohmann::ordered_json num(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); }
+
+nlohmann::ordered_json result_json(const MethodResult& r) {
+  nlohmann::ordered_json j;
+  j["method"] = to_string(r.method);
+  j["B"] = num(r.params.B);
+  j["C"] = num(r.params.C);
+  j["D"] = num(r.params.D);
+  j["E"] = num(r.params.E);
+  j["mape_pct"] = num(r.metrics.mape_pct);
+  j["mape_points_excluded"] = r.metrics.mape_points_excluded;
+  j["rmse_n"] = num(r.metrics.rmse_n);
+  j["rmse_pct_peak"] = num(r.metrics.rmse_pct_peak);
+  const MfPeak pk = mf_peak(r.params, 1.0);
+  j["peak_force_n"] = num(pk.force_n);
+  j["peak_slip_ratio"] = num(pk.slip_ratio);
+  j["peak_reached"] = r.peak_reached;
+  if (r.stderr_) {
+    const auto& s = *r.stderr_;
+    j["stderr"] = {{"B", num(s[0])}, {"C", num(s[1])}, {"D", num(s[2])}, {"E", num(s[3])}};
+    j["converged"] = r.converged;
+    j["iterations"] = r.iterations;
+  } else {
+    j["stderr"] = nullptr;
+  }
+  if (r.bmu) j["bmu"] = *r.bmu;
+  return j;
+}
+
+std::string plot_path_for(const std::string& plot, const std::string& file, std::size_t n_files) {
+  if (n_files == 1) return plot;
+  const std::filesystem::path p(plot);
+  return (p.parent_path() / (p.stem().string() + "-" + std::filesystem::path(file).stem().string() +
+                             p.extension().string()))
+      .string();
+}
+
+}  // namespace
+
+void add_fit_command(CLI::App& app) {
+  struct Opts {
+    std::string method = "all", model, plot, slip_unit = "ratio";
+    bool json = false, shifts = false;
+    std::vector<std::string> files;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = app.add_subcommand("fit", "Identify B, C, D, E of brake-slip curves (CSV: slip,force_n or slip_pct,force_n)");
+  cmd->add_option("--method", o->method, "som|mlp|lm|hybrid|all")
+      ->check(CLI::IsMember({"som", "mlp", "lm", "hybrid", "all"}))
+      ->capture_default_str();
+  cmd->add_option("--model", o->model, "trained model (default: $BRAKEFIT_MODEL or the shipped model)");
+  cmd->add_flag("--json", o->json, "print one JSON document (brakefit.fit/1) per file, one per line");
+  cmd->add_option("--plot", o->plot, "write measured vs fitted curves as SVG (several files: OUT-<name>.svg)");
+  cmd->add_option("--slip-unit", o->slip_unit, "slip unit for the table and plot axes (JSON keeps ratios)")
+      ->check(CLI::IsMember({"ratio", "percent"}))
+      ->capture_default_str();
+  cmd->add_flag("--shifts", o->shifts, "least-squares methods also fit SHx and SVx");
+  cmd->add_option("curves", o->files, "curve CSV files")->required();
+  cmd->callback([o] {
+    std::vector<Method> methods;
+    if (o->method == "all") {
+      methods = {Method::Som, Method::Mlp, Method::Lm, Method::Hybrid};
+    } else {
+      Method m{};
+      parse(o->method, m);
+      methods = {m};
+    }
+    const bool needs_model = o->method != "lm" || !o->model.empty();
+    std::optional<Model> model;
+    if (needs_model) model = load_model(resolve_model_path(o->model));
+    // Parse every file before printing anything: a bad file means no partial output.
+    std::vector<ParsedCurve> curves;
+    for (const auto& f : o->files) curves.push_back(parse_curve_csv(read_file(f), f));
+    fit::MfFitOptions fit_opts;
+    fit_opts.fit_shifts = o->shifts;
+    const SlipUnit unit = o->slip_unit == "percent" ? SlipUnit::Percent : SlipUnit::Ratio;
+    std::vector<std::vector<MethodResult>> all;
+    for (std::size_t i = 0; i < curves.size(); ++i) {
+      spdlog::debug("fitting {} ({} points)", o->files[i], curves[i].curve.size());
+      std::vector<MethodResult> rs;
+      for (Method m : methods) rs.push_back(run_method(m, model ? &*model : nullptr, curves[i].curve, fit_opts));
+      all.push_back(std::move(rs));
+    }
+    for (std::size_t i = 0; i < curves.size(); ++i) {
+      const auto& c = curves[i].curve;
+      if (!o->plot.empty()) {
+        const std::string path = plot_path_for(o->plot, o->files[i], curves.size());
+        write_file(path, plot::fit_chart_svg(fmt::format("{}: measured vs fitted", o->files[i]), c, all[i], unit));
+        spdlog::info("plot written to {}", path);
+      }
+      if (o->json) {
+        nlohmann::ordered_json doc;
+        doc["schema"] = "brakefit.fit/1";
+        doc["version"] = kVersion;
+        doc["model_hash"] = model ? nlohmann::ordered_json(model->hash) : nlohmann::ordered_json(nullptr);
+        doc["file"] = o->files[i];
+        doc["slip_unit"] = to_string(curves[i].input_unit);
+        doc["points"] = c.size();
+        doc["mape_rule"] = kMapeRule;
+        doc["results"] = nlohmann::ordered_json::array();
+        for (const auto& r : all[i]) doc["results"].push_back(result_json(r));
+        std::cout << doc.dump() << "\n";
+        continue;
+      }
+      const bool pct = unit == SlipUnit::Percent;
+      std::cout << fmt::format("{}: {} points (input slip in {}), model {}\n", o->files[i], c.size(),
+                               to_string(curves[i].input_unit), model ? model->hash.substr(0, 19) : "none");
+      std::cout << fmt::format("  {:<7} {:>10} {:>7} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9}  {}\n", "method",
+                               pct ? "B [1/%]" : "B [1/-]", "C", "D [N]", "E", "MAPE %", "RMSE N", "peak N",
+                               pct ? "peak %" : "peak [-]", "peak in data");
+      for (const auto& r : all[i]) {
+        const MfPeak pk = mf_peak(r.params, 1.0);
+        std::cout << fmt::format("  {:<7} {:>10.4f} {:>7.4f} {:>9.1f} {:>8.4f} {:>8.3f} {:>8.2f} {:>9.1f} {:>9.4f}  {}\n",
+                                 to_string(r.method), pct ? r.params.B / 100.0 : r.params.B, r.params.C, r.params.D,
+                                 r.params.E, r.metrics.mape_pct, r.metrics.rmse_n, pk.force_n,
+                                 pct ? pk.slip_ratio * 100.0 : pk.slip_ratio, r.peak_reached ? "yes" : "NO");
+        if (r.stderr_) {
+          const auto& s = *r.stderr_;
+          std::cout << fmt::format("  {:<7} {:>10.4f} {:>7.4f} {:>9.1f} {:>8.4f}   (standard errors)\n", "  +/-",
+                                   pct ? s[0] / 100.0 : s[0], s[1], s[2], s[3]);
+        }
+      }
+      std::cout << fmt::format("  MAPE: {}; {} excluded here\n", kMapeRule,
+                               all[i].empty() ? 0 : all[i][0].metrics.mape_points_excluded);
+    }
+  });
+}
+
+}  // namespace brakefit::cli

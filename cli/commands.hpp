@@ -1,0 +1,11 @@
+#pragma once
+#include <CLI/CLI.hpp>
+
+namespace brakefit::cli {
+
+void add_train_command(CLI::App& app);
+void add_fit_command(CLI::App& app);
+void add_map_command(CLI::App& app);
+void add_synth_command(CLI::App& app);
+
+}  // namespace brakefit::cli

@@ -1,0 +1,30 @@
+#pragma once
+// File I/O for the CLI (core stays free of I/O) and its exit codes.
+#include <stdexcept>
+#include <string>
+
+#include "core/identify.hpp"
+
+namespace brakefit::cli {
+
+// sysexits-style codes: 65 bad data, 66 missing input, 73 cannot write, 78 bad configuration.
+inline constexpr int kExitDataError = 65;
+inline constexpr int kExitNoInput = 66;
+inline constexpr int kExitCantCreate = 73;
+inline constexpr int kExitConfig = 78;
+
+struct ExitError : std::runtime_error {
+  ExitError(int code_, const std::string& msg) : std::runtime_error(msg), code(code_) {}
+  int code;
+};
+
+std::string read_file(const std::string& path);
+/// Writes via a temporary file and rename, so a reader never sees half a file.
+void write_file(const std::string& path, const std::string& content);
+/// The model given, else $BRAKEFIT_MODEL, else the default model shipped in data/models/.
+std::string resolve_model_path(const std::string& given);
+Model load_model(const std::string& path);
+/// Logs a stage's progress at most every 10 %.
+void log_progress(const std::string& stage, std::size_t done, std::size_t total, double loss);
+
+}  // namespace brakefit::cli

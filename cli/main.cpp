@@ -1,0 +1,43 @@
+// brakefit: identify Pacejka-96 brake-slip parameters (SOM, MLP, least squares, hybrid).
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+
+#include "brakefit/version.hpp"
+#include "cli/commands.hpp"
+#include "cli/io.hpp"
+
+int main(int argc, char** argv) {
+  auto logger = spdlog::stderr_color_mt("brakefit");
+  spdlog::set_default_logger(logger);
+  spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+
+  CLI::App app{"brakefit: Pacejka-96 brake-slip identification for roller brake testers"};
+  app.set_version_flag("--version", std::string("brakefit ") + brakefit::kVersion);
+  app.require_subcommand(1);
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level, "trace|debug|info|warn|error|off")->capture_default_str();
+  app.parse_complete_callback([&] { spdlog::set_level(spdlog::level::from_str(log_level)); });
+  brakefit::cli::add_train_command(app);
+  brakefit::cli::add_fit_command(app);
+  brakefit::cli::add_map_command(app);
+  brakefit::cli::add_synth_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const brakefit::cli::ExitError& e) {
+    std::cerr << "brakefit: error: " << e.what() << "\n";
+    return e.code;
+  } catch (const brakefit::InputError& e) {
+    std::cerr << "brakefit: error: " << e.what() << "\n";
+    return brakefit::cli::kExitDataError;
+  } catch (const std::exception& e) {
+    std::cerr << "brakefit: internal error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,122 @@
+#include "core/identify.hpp"
+
+#include <cmath>
+
+namespace brakefit {
+
+const char* to_string(Method m) {
+  switch (m) {
+    case Method::Som: return "som";
+    case Method::Mlp: return "mlp";
+    case Method::Lm: return "lm";
+    case Method::Hybrid: return "hybrid";
+  }
+  return "?";
+}
+
+bool parse(const std::string& s, Method& out) {
+  for (auto m : {Method::Som, Method::Mlp, Method::Lm, Method::Hybrid})
+    if (s == to_string(m)) return out = m, true;
+  return false;
+}
+
+std::vector<double> normalise_shape(const GridCurve& g) {
+  double peak = 0.0;
+  for (std::size_t k = 0; k < g.values.size(); ++k)
+    if (g.mask[k]) peak = std::max(peak, std::abs(g.values[k]));
+  std::vector<double> s(g.values.size(), 0.0);
+  if (peak <= 0) return s;
+  for (std::size_t k = 0; k < s.size(); ++k)
+    if (g.mask[k]) s[k] = g.values[k] / peak;
+  return s;
+}
+
+Eigen::RowVectorXd mlp_features(const GridCurve& g, const std::vector<double>& grid) {
+  const std::vector<double> s = normalise_shape(g);
+  Eigen::RowVectorXd f(static_cast<Eigen::Index>(s.size() + 1));
+  for (std::size_t k = 0; k < s.size(); ++k) f(static_cast<Eigen::Index>(k)) = s[k];
+  f(static_cast<Eigen::Index>(s.size())) = g.last_valid_slip(grid);
+  return f;
+}
+
+double fit_scale_D(const Curve& c, double B, double C, double E) {
+  const MfParams unit{B, C, 1.0, E, 0.0, 0.0};
+  double fs = 0.0, ss = 0.0;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    const double s = mf_force_n(unit, c.slip_ratio[i]);
+    fs += c.force_n[i] * s;
+    ss += s * s;
+  }
+  return ss > 0 ? fs / ss : 0.0;
+}
+
+SomEstimate identify_som(const Model& m, const Curve& c) {
+  const GridCurve g = resample_to_grid(c, m.grid);
+  const bool shape = m.config.som_input == SomInput::Shape;
+  SomEstimate est;
+  auto match = m.som.bmu_masked(g.values, g.mask, shape);
+  if (m.unit_hits[match.unit] == 0) {
+    std::vector<bool> allowed(m.unit_hits.size());
+    for (std::size_t u = 0; u < allowed.size(); ++u) allowed[u] = m.unit_hits[u] > 0;
+    match = m.som.bmu_masked(g.values, g.mask, shape, &allowed);
+    est.fallback = true;
+  }
+  est.bmu = match.unit;
+  est.params = m.unit_labels[match.unit];
+  if (shape) est.params.D = fit_scale_D(c, est.params.B, est.params.C, est.params.E);
+  return est;
+}
+
+MfParams identify_mlp(const Model& m, const Curve& c) {
+  const GridCurve g = resample_to_grid(c, m.grid);
+  const Eigen::MatrixXd x = m.mlp_in.apply(mlp_features(g, m.grid));
+  const Eigen::MatrixXd y = m.mlp_out.invert(m.mlp.predict(x));
+  MfParams p;
+  p.B = std::exp(y(0, 0));
+  p.C = y(0, 1);
+  p.E = y(0, 2);
+  p.D = fit_scale_D(c, p.B, p.C, p.E);
+  return p;
+}
+
+MethodResult run_method(Method method, const Model* model, const Curve& c, const fit::MfFitOptions& options) {
+  MethodResult r;
+  r.method = method;
+  switch (method) {
+    case Method::Som: {
+      const SomEstimate e = identify_som(*model, c);
+      r.params = e.params;
+      r.bmu = e.bmu;
+      break;
+    }
+    case Method::Mlp:
+      r.params = identify_mlp(*model, c);
+      break;
+    case Method::Lm: {
+      const fit::MfFitResult f = fit::fit_mf(c, fit::classic_start(c), options);
+      r.params = f.params;
+      r.stderr_ = f.stderr_;
+      r.iterations = f.iterations;
+      r.converged = f.converged;
+      break;
+    }
+    case Method::Hybrid: {
+      // LM from the SOM estimate and from the MLP estimate; the lower sum of squares wins.
+      const SomEstimate e = identify_som(*model, c);
+      fit::MfFitResult best = fit::fit_mf(c, e.params, options);
+      const fit::MfFitResult from_mlp = fit::fit_mf(c, identify_mlp(*model, c), options);
+      if (from_mlp.ssr < best.ssr) best = from_mlp;
+      r.params = best.params;
+      r.stderr_ = best.stderr_;
+      r.iterations = best.iterations;
+      r.converged = best.converged;
+      r.bmu = e.bmu;
+      break;
+    }
+  }
+  r.metrics = compute_metrics(c, r.params);
+  r.peak_reached = fit::peak_reached(r.params, c.max_slip_ratio());
+  return r;
+}
+
+}  // namespace brakefit

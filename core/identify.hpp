@@ -1,0 +1,66 @@
+#pragma once
+// A trained model (SOM + its unit labels + MLP, with the settings they were trained from) and the
+// four identification methods: som (the paper's: average of the parameters labelled on the BMU),
+// mlp, lm (classic least squares from a fixed start) and hybrid (LM seeded by SOM and MLP).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/curve.hpp"
+#include "core/fit/mf_fit.hpp"
+#include "core/metrics.hpp"
+#include "core/mlp/mlp.hpp"
+#include "core/som/som.hpp"
+#include "core/train_config.hpp"
+
+namespace brakefit {
+
+struct Model {
+  TrainConfig config;
+  std::vector<double> grid;               ///< slip ratios of the SOM / MLP input
+  som::Som som;
+  std::vector<std::size_t> unit_hits;     ///< database curves mapped to each unit
+  std::vector<MfParams> unit_labels;      ///< mean parameters of those curves (valid where hits > 0)
+  double som_qe = 0.0;
+  double som_te = 0.0;
+  mlp::Network mlp;
+  mlp::Scaler mlp_in;
+  mlp::Scaler mlp_out;
+  mlp::TrainReport mlp_report;
+  std::string hash;  ///< "sha256:..." of the serialised model (set by save/load)
+};
+
+enum class Method { Som, Mlp, Lm, Hybrid };
+const char* to_string(Method m);
+bool parse(const std::string& s, Method& out);
+
+struct MethodResult {
+  Method method = Method::Lm;
+  MfParams params;
+  FitMetrics metrics;
+  bool peak_reached = false;
+  std::optional<std::array<double, kMfParamCount>> stderr_;  ///< only for least-squares methods
+  std::optional<std::size_t> bmu;                            ///< SOM unit used (som, hybrid)
+  int iterations = 0;
+  bool converged = true;
+};
+
+/// Peak-normalised shape on the grid (divided by max |value| over the valid points).
+std::vector<double> normalise_shape(const GridCurve& g);
+/// MLP input features: the normalised shape (0 where masked) and the last valid slip.
+Eigen::RowVectorXd mlp_features(const GridCurve& g, const std::vector<double>& grid);
+/// Least-squares D for fixed B, C, E: argmin_D sum (f - D s(x))^2, s = formula with D = 1.
+double fit_scale_D(const Curve& c, double B, double C, double E);
+
+struct SomEstimate {
+  MfParams params;
+  std::size_t bmu = 0;
+  bool fallback = false;  ///< the BMU held no labels: the nearest labelled unit was used
+};
+SomEstimate identify_som(const Model& m, const Curve& c);
+MfParams identify_mlp(const Model& m, const Curve& c);
+
+/// Runs one method on a curve (som/mlp/hybrid need a trained model).
+MethodResult run_method(Method method, const Model* model, const Curve& c, const fit::MfFitOptions& options = {});
+
+}  // namespace brakefit

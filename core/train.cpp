@@ -1,0 +1,105 @@
+#include "core/train.hpp"
+
+#include <cmath>
+
+#include "core/rng.hpp"
+
+namespace brakefit {
+
+Eigen::MatrixXd som_input_matrix(const CurveDatabase& db, SomInput input) {
+  Eigen::MatrixXd x = db.forces_n;
+  if (input == SomInput::Shape) {
+    for (Eigen::Index i = 0; i < x.rows(); ++i) {
+      const double peak = x.row(i).cwiseAbs().maxCoeff();
+      if (peak > 0) x.row(i) /= peak;
+    }
+  }
+  return x;
+}
+
+void label_units(Model& m, const CurveDatabase& db, const Eigen::MatrixXd& som_data) {
+  const std::size_t u = m.som.units();
+  m.unit_hits.assign(u, 0);
+  std::vector<std::array<double, 4>> sums(u, {0, 0, 0, 0});
+  const auto bmus = m.som.bmus(som_data);
+  for (std::size_t j = 0; j < bmus.size(); ++j) {
+    const MfParams& p = db.labels[j];
+    auto& s = sums[bmus[j]];
+    s[0] += p.B;
+    s[1] += p.C;
+    s[2] += p.D;
+    s[3] += p.E;
+    ++m.unit_hits[bmus[j]];
+  }
+  m.unit_labels.assign(u, MfParams{0, 0, 0, 0, 0, 0});
+  for (std::size_t i = 0; i < u; ++i) {
+    if (!m.unit_hits[i]) continue;
+    const double n = static_cast<double>(m.unit_hits[i]);
+    m.unit_labels[i] = MfParams{sums[i][0] / n, sums[i][1] / n, sums[i][2] / n, sums[i][3] / n, 0, 0};
+  }
+  m.som_qe = m.som.quantization_error(som_data);
+  m.som_te = m.som.topographic_error(som_data);
+}
+
+namespace {
+
+void train_som_part(Model& m, const CurveDatabase& db, const TrainProgress& progress) {
+  const Eigen::MatrixXd x = som_input_matrix(db, m.config.som_input);
+  m.som = som::Som::initialise(m.config.som, x);
+  m.som.train(m.config.som, x, [&](const char* phase, std::size_t e, std::size_t total) {
+    if (progress) progress(std::string("som-") + phase, e, total, NAN);
+  });
+  label_units(m, db, x);
+}
+
+}  // namespace
+
+Model train_som_only(const TrainConfig& c, const TrainProgress& progress) {
+  Model m;
+  m.config = c;
+  m.grid = default_slip_grid();
+  const CurveDatabase db = generate_database(c.database, m.grid);
+  train_som_part(m, db, progress);
+  return m;
+}
+
+Model train_model(const TrainConfig& c, const TrainProgress& progress) {
+  Model m;
+  m.config = c;
+  m.grid = default_slip_grid();
+  const CurveDatabase db = generate_database(c.database, m.grid);
+  train_som_part(m, db, progress);
+
+  // MLP: features of each database curve, a share of them cut short at a random slip (as a roller
+  // test that switches off early), targets log B, C, E.
+  const auto n = static_cast<Eigen::Index>(db.labels.size());
+  const auto g = static_cast<Eigen::Index>(m.grid.size());
+  Eigen::MatrixXd x(n, g + 1), y(n, 3);
+  Rng rng(c.mlp.seed ^ 0x5DEECE66DULL);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    GridCurve gc;
+    gc.values.assign(m.grid.size(), 0.0);
+    gc.mask.assign(m.grid.size(), true);
+    for (Eigen::Index k = 0; k < g; ++k) gc.values[static_cast<std::size_t>(k)] = db.forces_n(i, k);
+    if (rng.uniform() < c.mlp_truncate_fraction) {
+      const double cut = rng.uniform(c.mlp_truncate_min_ratio, c.mlp_truncate_max_ratio);
+      for (std::size_t k = 0; k < m.grid.size(); ++k) gc.mask[k] = m.grid[k] <= cut + 1e-12;
+    }
+    x.row(i) = mlp_features(gc, m.grid);
+    const MfParams& p = db.labels[static_cast<std::size_t>(i)];
+    y.row(i) << std::log(p.B), p.C, p.E;
+  }
+  m.mlp_in = mlp::Scaler::fit(x);
+  m.mlp_out = mlp::Scaler::fit(y);
+  std::vector<std::size_t> layers{static_cast<std::size_t>(g + 1)};
+  layers.insert(layers.end(), c.mlp.hidden.begin(), c.mlp.hidden.end());
+  layers.push_back(3);
+  m.mlp = mlp::Network(layers, c.mlp.seed);
+  m.mlp_report = mlp::train(m.mlp, m.mlp_in.apply(x), m.mlp_out.apply(y), c.mlp,
+                            [&](std::size_t e, std::size_t total, double tr, double) {
+                              if (progress) progress("mlp", e, total, tr);
+                            });
+  return m;
+}
+
+}  // namespace brakefit
