@@ -140,7 +140,7 @@ std::string render_svg(const SomMap& m) {
   const double ml = 40, mt = 70;
   const double map_w = (static_cast<double>(lat.cols()) + 0.5) * cell;
   const double map_h = (static_cast<double>(lat.rows()) - 1) * cell * std::sqrt(0.75) + 2 * r;
-  const int width = static_cast<int>(ml + map_w + 170), height = static_cast<int>(mt + map_h + 40);
+  const int width = static_cast<int>(ml + map_w + 210), height = static_cast<int>(mt + map_h + 40);
   const double umin = m.umatrix.size() ? m.umatrix.minCoeff() : 0.0;
   const double umax = m.umatrix.size() ? m.umatrix.maxCoeff() : 1.0;
   auto shade = [&](double u) {

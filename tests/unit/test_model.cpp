@@ -1,0 +1,165 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "core/curve_csv.hpp"
+#include "core/model_io.hpp"
+#include "core/train.hpp"
+
+using namespace brakefit;
+
+namespace {
+
+TrainConfig tiny_config() {
+  TrainConfig c;
+  c.database.n_curves = 300;
+  c.som.rows = 5;
+  c.som.cols = 5;
+  c.som.rough.epochs = 30;
+  c.som.fine.epochs = 20;
+  c.mlp.hidden = {8};
+  c.mlp.max_epochs = 60;
+  return c;
+}
+
+const Model& tiny_model() {
+  static Model m = [] {
+    Model t = train_model(tiny_config());
+    serialize_model(t);
+    return t;
+  }();
+  return m;
+}
+
+std::string load_error(const std::string& text) {
+  try {
+    deserialize_model(text, "m.json");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string read(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+TEST(TrainConfig, ShippedConfigEqualsBuiltInDefaultsAndRoundTrips) {
+  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/config/train.toml";
+  const TrainConfig shipped = parse_train_config(read(path), path);
+  const TrainConfig builtin;
+  EXPECT_EQ(format_train_config(shipped), format_train_config(builtin));
+  const TrainConfig again = parse_train_config(format_train_config(shipped), "round-trip");
+  EXPECT_EQ(format_train_config(again), format_train_config(shipped));
+  const std::string paper = std::string(BRAKEFIT_SOURCE_DIR) + "/config/train-paper.toml";
+  const TrainConfig p = parse_train_config(read(paper), paper);
+  EXPECT_EQ(p.database.preset, "paper");
+  EXPECT_EQ(p.som_input, SomInput::Raw);
+  EXPECT_DOUBLE_EQ(p.database.families.at(0).E.hi, 50.0);
+}
+
+TEST(TrainConfig, ErrorsNameTheKey) {
+  auto err = [](const std::string& t) {
+    try {
+      parse_train_config(t, "t.toml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(err("[som]\nrowz = 3\n").rfind("t.toml: key 'som.rowz': unknown key", 0), 0u);
+  EXPECT_EQ(err("[som]\nrows = \"ten\"\n").rfind("t.toml: key 'som.rows': expected an integer", 0), 0u);
+  EXPECT_EQ(err("[som]\nrows = 1\n").rfind("t.toml: key 'som.rows': value 1 is outside", 0), 0u);
+  EXPECT_EQ(err("[som]\nneighbourhood = \"mexican\"\n").rfind("t.toml: key 'som.neighbourhood'", 0), 0u);
+  EXPECT_EQ(err("[mlp]\ntrainer = \"adam\"\n").rfind("t.toml: key 'mlp.trainer'", 0), 0u);
+  EXPECT_EQ(err("[database]\npreset = \"bus\"\n").rfind("t.toml: key 'database.preset'", 0), 0u);
+  EXPECT_EQ(err("[[database.family]]\nB = [1, 2]\nC = [1, 2]\nD_n = [1]\nE = [0, 1]\n")
+                .rfind("t.toml: key 'database.family[0].D_n': expected exactly two", 0),
+            0u);
+  EXPECT_EQ(err("[som\n").rfind("t.toml:1:", 0), 0u);
+}
+
+TEST(Database, DeterministicFromSeedAndInsideTheRanges) {
+  const DatabaseSettings s = database_preset("default");
+  const auto grid = default_slip_grid();
+  const CurveDatabase a = generate_database(s, grid), b = generate_database(s, grid);
+  EXPECT_TRUE(a.forces_n == b.forces_n);
+  std::size_t trucks = 0;
+  for (std::size_t i = 0; i < a.labels.size(); ++i) {
+    const TyreFamily& f = s.families[a.family[i]];
+    EXPECT_TRUE(f.B.contains(a.labels[i].B) && f.C.contains(a.labels[i].C) && f.D_n.contains(a.labels[i].D) &&
+                f.E.contains(a.labels[i].E));
+    trucks += a.family[i] == 1;
+  }
+  EXPECT_NEAR(static_cast<double>(trucks) / static_cast<double>(a.labels.size()), 0.2, 0.04);
+  DatabaseSettings other = s;
+  other.seed += 1;
+  EXPECT_FALSE(generate_database(other, grid).forces_n == a.forces_n);
+  EXPECT_THROW(database_preset("bus"), InputError);
+}
+
+TEST(Model, RoundTripKeepsEveryPredictionAndTheHash) {
+  Model m = tiny_model();
+  const std::string text = serialize_model(m);
+  const Model back = deserialize_model(text, "m.json");
+  EXPECT_EQ(back.hash, m.hash);
+  EXPECT_EQ(back.hash.rfind("sha256:", 0), 0u);
+  EXPECT_EQ(back.hash.size(), 7u + 64u);
+  EXPECT_TRUE(back.som.codebook() == m.som.codebook());
+  EXPECT_EQ(back.unit_hits, m.unit_hits);
+  EXPECT_TRUE(back.mlp.parameters() == m.mlp.parameters());
+  const Curve c = sample_curve({14, 1.6, 4000, 0.2, 0, 0}, even_slips(100, 1.0));
+  for (Method meth : {Method::Som, Method::Mlp, Method::Hybrid}) {
+    const MethodResult r1 = run_method(meth, &m, c), r2 = run_method(meth, &back, c);
+    EXPECT_EQ(to_array(r1.params), to_array(r2.params)) << to_string(meth);
+  }
+}
+
+TEST(Model, CorruptTruncatedAndMismatchedFilesGiveClearErrors) {
+  Model m = tiny_model();
+  const std::string text = serialize_model(m);
+  // Change one digit of the codebook.
+  std::string corrupt = text;
+  const auto pos = corrupt.find("\"codebook\"");
+  const auto digit = corrupt.find_first_of("123456789", pos + 20);
+  corrupt[digit] = corrupt[digit] == '9' ? '8' : static_cast<char>(corrupt[digit] + 1);
+  EXPECT_NE(load_error(corrupt).find("m.json: model is corrupt: checksum mismatch"), std::string::npos);
+  EXPECT_NE(load_error(text.substr(0, text.size() / 2)).find("m.json: not a brakefit model (corrupt or truncated JSON"),
+            std::string::npos);
+  std::string v2 = text;
+  v2.replace(v2.find("\"format_version\": 1"), 19, "\"format_version\": 2");
+  EXPECT_NE(load_error(v2).find("model format version 2 is not supported"), std::string::npos);
+  EXPECT_NE(load_error("{\"schema\": \"other\"}").find("schema is not 'brakefit.model/1'"), std::string::npos);
+}
+
+TEST(Identify, HybridRecoversAnInRangeCurveAndSomFallsBackFromEmptyUnits) {
+  Model m = tiny_model();
+  const MfParams truth{16, 1.6, 5000, 0.25, 0, 0};
+  const Curve c = sample_curve(truth, even_slips(200, 1.0));
+  const MethodResult h = run_method(Method::Hybrid, &m, c);
+  EXPECT_NEAR(h.params.B, truth.B, 1e-6 * truth.B);
+  EXPECT_NEAR(h.params.E, truth.E, 1e-6);
+  EXPECT_LT(h.metrics.mape_pct, 1e-6);
+  const MethodResult s = run_method(Method::Som, &m, c);
+  EXPECT_LT(s.metrics.mape_pct, 5.0);  // a coarse 5x5 map, still in the right region
+  // Empty the BMU's labels: identification falls back to the best labelled unit.
+  const SomEstimate before = identify_som(m, c);
+  ASSERT_FALSE(before.fallback);
+  m.unit_hits[before.bmu] = 0;
+  const SomEstimate after = identify_som(m, c);
+  EXPECT_TRUE(after.fallback);
+  EXPECT_NE(after.bmu, before.bmu);
+  EXPECT_GT(m.unit_hits[after.bmu], 0u);
+}
+
+TEST(Identify, ShapeScaleIsTheLinearLeastSquaresD) {
+  const MfParams p{12, 1.55, 3333, 0.1, 0, 0};
+  const Curve c = sample_curve(p, even_slips(40, 0.3));
+  EXPECT_NEAR(fit_scale_D(c, p.B, p.C, p.E), 3333, 1e-8);
+}

@@ -1,0 +1,32 @@
+// The shipped default model must be reproducible: retraining from the settings and seeds recorded
+// in it gives the same map and network within tolerance.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "core/model_io.hpp"
+#include "core/train.hpp"
+
+using namespace brakefit;
+
+TEST(ShippedModel, RetrainingFromItsRecordedSettingsReproducesIt) {
+  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/data/models/default.json";
+  std::ifstream in(path);
+  ASSERT_TRUE(in) << path;
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const Model shipped = deserialize_model(ss.str(), path);
+  Model again = train_model(shipped.config);
+  EXPECT_LT((again.som.codebook() - shipped.som.codebook()).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_EQ(again.unit_hits, shipped.unit_hits);
+  EXPECT_LT((again.mlp.parameters() - shipped.mlp.parameters()).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_NEAR(again.som_qe, shipped.som_qe, 1e-9);
+  // Identification on a probe curve agrees.
+  const Curve c = sample_curve({14, 1.6, 4000, 0.2, 0, 0}, even_slips(150, 0.27));
+  for (Method m : {Method::Som, Method::Mlp}) {
+    const auto a = run_method(m, &again, c).params, b = run_method(m, &shipped, c).params;
+    EXPECT_NEAR(a.B, b.B, 1e-6 * b.B) << to_string(m);
+    EXPECT_NEAR(a.D, b.D, 1e-6 * b.D) << to_string(m);
+  }
+}
