@@ -1,5 +1,6 @@
 // Google Benchmark: BMU lookup, one LM fit, one hybrid fit (200 points), SOM training in the
-// paper's configuration (10x10 hex, batch, 1000 rough + 500 fine epochs, 2000 curves), MLP training.
+// paper's configuration (10x10 hex, batch, 1000 rough + 500 fine epochs, 2000 curves), MLP
+// training.
 #include <benchmark/benchmark.h>
 
 #include "cli/io.hpp"
@@ -41,11 +42,13 @@ void BM_HybridFit200(benchmark::State& st) {
   const Curve c = test_curve();
   for (auto _ : st) benchmark::DoNotOptimize(run_method(Method::Hybrid, &m, c));
 }
-BENCHMARK(BM_HybridFit200)->Unit(benchmark::kMicrosecond)->ComputeStatistics("p50", [](const std::vector<double>& v) {
-  std::vector<double> s = v;
-  std::sort(s.begin(), s.end());
-  return s[s.size() / 2];
-});
+BENCHMARK(BM_HybridFit200)
+    ->Unit(benchmark::kMicrosecond)
+    ->ComputeStatistics("p50", [](const std::vector<double>& v) {
+      std::vector<double> s = v;
+      std::sort(s.begin(), s.end());
+      return s[s.size() / 2];
+    });
 
 void BM_SomTrainPaper(benchmark::State& st) {
   TrainConfig c;  // defaults: 10x10 hex, batch, 1000 + 500 epochs, 2000 curves

@@ -15,7 +15,9 @@ namespace brakefit::cli {
 
 namespace {
 
-nlohmann::ordered_json num(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); }
+nlohmann::ordered_json num(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
 
 nlohmann::ordered_json result_json(const MethodResult& r) {
   nlohmann::ordered_json j;
@@ -61,14 +63,19 @@ void add_fit_command(CLI::App& app) {
     std::vector<std::string> files;
   };
   auto o = std::make_shared<Opts>();
-  auto* cmd = app.add_subcommand("fit", "Identify B, C, D, E of brake-slip curves (CSV: slip,force_n or slip_pct,force_n)");
+  auto* cmd = app.add_subcommand(
+      "fit", "Identify B, C, D, E of brake-slip curves (CSV: slip,force_n or slip_pct,force_n)");
   cmd->add_option("--method", o->method, "som|mlp|lm|hybrid|all")
       ->check(CLI::IsMember({"som", "mlp", "lm", "hybrid", "all"}))
       ->capture_default_str();
-  cmd->add_option("--model", o->model, "trained model (default: $BRAKEFIT_MODEL or the shipped model)");
-  cmd->add_flag("--json", o->json, "print one JSON document (brakefit.fit/1) per file, one per line");
-  cmd->add_option("--plot", o->plot, "write measured vs fitted curves as SVG (several files: OUT-<name>.svg)");
-  cmd->add_option("--slip-unit", o->slip_unit, "slip unit for the table and plot axes (JSON keeps ratios)")
+  cmd->add_option("--model", o->model,
+                  "trained model (default: $BRAKEFIT_MODEL or the shipped model)");
+  cmd->add_flag("--json", o->json,
+                "print one JSON document (brakefit.fit/1) per file, one per line");
+  cmd->add_option("--plot", o->plot,
+                  "write measured vs fitted curves as SVG (several files: OUT-<name>.svg)");
+  cmd->add_option("--slip-unit", o->slip_unit,
+                  "slip unit for the table and plot axes (JSON keeps ratios)")
       ->check(CLI::IsMember({"ratio", "percent"}))
       ->capture_default_str();
   cmd->add_flag("--shifts", o->shifts, "least-squares methods also fit SHx and SVx");
@@ -87,29 +94,35 @@ void add_fit_command(CLI::App& app) {
     if (needs_model) model = load_model(resolve_model_path(o->model));
     // Parse every file before printing anything: a bad file means no partial output.
     std::vector<ParsedCurve> curves;
+    curves.reserve(o->files.size());
     for (const auto& f : o->files) curves.push_back(parse_curve_csv(read_file(f), f));
-    fit::MfFitOptions fit_opts;
+    fit::MfFitOptions fit_opts = fit_options_for(model ? &*model : nullptr);
     fit_opts.fit_shifts = o->shifts;
     const SlipUnit unit = o->slip_unit == "percent" ? SlipUnit::Percent : SlipUnit::Ratio;
     std::vector<std::vector<MethodResult>> all;
+    all.reserve(curves.size());
     for (std::size_t i = 0; i < curves.size(); ++i) {
       spdlog::debug("fitting {} ({} points)", o->files[i], curves[i].curve.size());
       std::vector<MethodResult> rs;
-      for (Method m : methods) rs.push_back(run_method(m, model ? &*model : nullptr, curves[i].curve, fit_opts));
+      rs.reserve(methods.size());
+      for (Method m : methods)
+        rs.push_back(run_method(m, model ? &*model : nullptr, curves[i].curve, fit_opts));
       all.push_back(std::move(rs));
     }
     for (std::size_t i = 0; i < curves.size(); ++i) {
       const auto& c = curves[i].curve;
       if (!o->plot.empty()) {
         const std::string path = plot_path_for(o->plot, o->files[i], curves.size());
-        write_file(path, plot::fit_chart_svg(fmt::format("{}: measured vs fitted", o->files[i]), c, all[i], unit));
+        write_file(path, plot::fit_chart_svg(fmt::format("{}: measured vs fitted", o->files[i]), c,
+                                             all[i], unit));
         spdlog::info("plot written to {}", path);
       }
       if (o->json) {
         nlohmann::ordered_json doc;
         doc["schema"] = "brakefit.fit/1";
         doc["version"] = kVersion;
-        doc["model_hash"] = model ? nlohmann::ordered_json(model->hash) : nlohmann::ordered_json(nullptr);
+        doc["model_hash"] =
+            model ? nlohmann::ordered_json(model->hash) : nlohmann::ordered_json(nullptr);
         doc["file"] = o->files[i];
         doc["slip_unit"] = to_string(curves[i].input_unit);
         doc["points"] = c.size();
@@ -120,21 +133,25 @@ void add_fit_command(CLI::App& app) {
         continue;
       }
       const bool pct = unit == SlipUnit::Percent;
-      std::cout << fmt::format("{}: {} points (input slip in {}), model {}\n", o->files[i], c.size(),
-                               to_string(curves[i].input_unit), model ? model->hash.substr(0, 19) : "none");
-      std::cout << fmt::format("  {:<7} {:>10} {:>7} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9}  {}\n", "method",
-                               pct ? "B [1/%]" : "B [1/-]", "C", "D [N]", "E", "MAPE %", "RMSE N", "peak N",
-                               pct ? "peak %" : "peak [-]", "peak in data");
+      std::cout << fmt::format("{}: {} points (input slip in {}), model {}\n", o->files[i],
+                               c.size(), to_string(curves[i].input_unit),
+                               model ? model->hash.substr(0, 19) : "none");
+      std::cout << fmt::format("  {:<7} {:>10} {:>7} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9}  {}\n",
+                               "method", pct ? "B [1/%]" : "B [1/-]", "C", "D [N]", "E", "MAPE %",
+                               "RMSE N", "peak N", pct ? "peak %" : "peak [-]", "peak in data");
       for (const auto& r : all[i]) {
         const MfPeak pk = mf_peak(r.params, 1.0);
-        std::cout << fmt::format("  {:<7} {:>10.4f} {:>7.4f} {:>9.1f} {:>8.4f} {:>8.3f} {:>8.2f} {:>9.1f} {:>9.4f}  {}\n",
-                                 to_string(r.method), pct ? r.params.B / 100.0 : r.params.B, r.params.C, r.params.D,
-                                 r.params.E, r.metrics.mape_pct, r.metrics.rmse_n, pk.force_n,
-                                 pct ? pk.slip_ratio * 100.0 : pk.slip_ratio, r.peak_reached ? "yes" : "NO");
+        std::cout << fmt::format(
+            "  {:<7} {:>10.4f} {:>7.4f} {:>9.1f} {:>8.4f} {:>8.3f} {:>8.2f} {:>9.1f} {:>9.4f}  "
+            "{}\n",
+            to_string(r.method), pct ? r.params.B / 100.0 : r.params.B, r.params.C, r.params.D,
+            r.params.E, r.metrics.mape_pct, r.metrics.rmse_n, pk.force_n,
+            pct ? pk.slip_ratio * 100.0 : pk.slip_ratio, r.peak_reached ? "yes" : "NO");
         if (r.stderr_) {
           const auto& s = *r.stderr_;
-          std::cout << fmt::format("  {:<7} {:>10.4f} {:>7.4f} {:>9.1f} {:>8.4f}   (standard errors)\n", "  +/-",
-                                   pct ? s[0] / 100.0 : s[0], s[1], s[2], s[3]);
+          std::cout << fmt::format(
+              "  {:<7} {:>10.4f} {:>7.4f} {:>9.1f} {:>8.4f}   (standard errors)\n", "  +/-",
+              pct ? s[0] / 100.0 : s[0], s[1], s[2], s[3]);
         }
       }
       std::cout << fmt::format("  MAPE: {}; {} excluded here\n", kMapeRule,

@@ -15,8 +15,10 @@ void add_train_command(CLI::App& app) {
     std::string config, out;
   };
   auto opts = std::make_shared<Opts>();
-  auto* cmd = app.add_subcommand("train", "Generate the curve database and train the SOM and the MLP");
-  cmd->add_option("--config", opts->config, "training configuration (TOML); default: built-in settings")
+  auto* cmd =
+      app.add_subcommand("train", "Generate the curve database and train the SOM and the MLP");
+  cmd->add_option("--config", opts->config,
+                  "training configuration (TOML); default: built-in settings")
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", opts->out, "model file to write")->required();
   cmd->callback([opts] {
@@ -28,20 +30,22 @@ void add_train_command(CLI::App& app) {
         throw ExitError(kExitConfig, e.what());
       }
     }
-    spdlog::info("database: preset {}, {} curves, seed {}; SOM {}x{} {} {} on {} curves; MLP {} trainer",
-                 cfg.database.preset, cfg.database.n_curves, cfg.database.seed, cfg.som.rows, cfg.som.cols,
-                 som::to_string(cfg.som.algorithm), som::to_string(cfg.som.neighbourhood), to_string(cfg.som_input),
-                 mlp::to_string(cfg.mlp.trainer));
+    spdlog::info(
+        "database: preset {}, {} curves, seed {}; SOM {}x{} {} {} on {} curves; MLP {} trainer",
+        cfg.database.preset, cfg.database.n_curves, cfg.database.seed, cfg.som.rows, cfg.som.cols,
+        som::to_string(cfg.som.algorithm), som::to_string(cfg.som.neighbourhood),
+        to_string(cfg.som_input), mlp::to_string(cfg.mlp.trainer));
     Model m = train_model(cfg, log_progress);
     const std::string text = serialize_model(m);
     write_file(opts->out, text);
     std::cout << fmt::format(
-        "model {}\n  hash {}\n  SOM qe {:.5f} te {:.4f}, {} of {} units labelled\n  MLP {} epochs (best {}), "
+        "model {}\n  hash {}\n  SOM qe {:.5f} te {:.4f}, {} of {} units labelled\n  MLP {} epochs "
+        "(best {}), "
         "validation mse {:.5f}{}\n",
         opts->out, m.hash, m.som_qe, m.som_te,
-        std::count_if(m.unit_hits.begin(), m.unit_hits.end(), [](std::size_t h) { return h > 0; }), m.unit_hits.size(),
-        m.mlp_report.epochs, m.mlp_report.best_epoch, m.mlp_report.validation_mse,
-        m.mlp_report.early_stopped ? " (early stopped)" : "");
+        std::count_if(m.unit_hits.begin(), m.unit_hits.end(), [](std::size_t h) { return h > 0; }),
+        m.unit_hits.size(), m.mlp_report.epochs, m.mlp_report.best_epoch,
+        m.mlp_report.validation_mse, m.mlp_report.early_stopped ? " (early stopped)" : "");
   });
 }
 

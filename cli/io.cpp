@@ -17,7 +17,8 @@ namespace brakefit::cli {
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw ExitError(kExitNoInput, fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
+  if (!in)
+    throw ExitError(kExitNoInput, fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
   std::ostringstream ss;
   ss << in.rdbuf();
   if (in.bad()) throw ExitError(kExitNoInput, fmt::format("{}: read error", path));
@@ -28,13 +29,16 @@ void write_file(const std::string& path, const std::string& content) {
   const std::string tmp = path + ".tmp";
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw ExitError(kExitCantCreate, fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
+    if (!out)
+      throw ExitError(kExitCantCreate,
+                      fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
     out << content;
     out.flush();
     if (!out) throw ExitError(kExitCantCreate, fmt::format("{}: write failed", path));
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0)
-    throw ExitError(kExitCantCreate, fmt::format("{}: cannot rename into place: {}", path, std::strerror(errno)));
+    throw ExitError(kExitCantCreate,
+                    fmt::format("{}: cannot rename into place: {}", path, std::strerror(errno)));
 }
 
 std::string resolve_model_path(const std::string& given) {
@@ -56,7 +60,8 @@ void log_progress(const std::string& stage, std::size_t done, std::size_t total,
   const std::size_t step = std::max<std::size_t>(1, total / 10);
   if (done % step != 0 && done != total) return;
   if (std::isnan(loss))
-    spdlog::info("{}: {}/{} ({:.0f} %)", stage, done, total, 100.0 * static_cast<double>(done) / static_cast<double>(total));
+    spdlog::info("{}: {}/{} ({:.0f} %)", stage, done, total,
+                 100.0 * static_cast<double>(done) / static_cast<double>(total));
   else
     spdlog::info("{}: epoch {}/{} training loss {:.5f}", stage, done, total, loss);
 }

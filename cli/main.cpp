@@ -10,7 +10,9 @@
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   auto logger = spdlog::stderr_color_mt("brakefit");
   spdlog::set_default_logger(logger);
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
@@ -19,7 +21,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("brakefit ") + brakefit::kVersion);
   app.require_subcommand(1);
   std::string log_level = "info";
-  app.add_option("--log-level", log_level, "trace|debug|info|warn|error|off")->capture_default_str();
+  app.add_option("--log-level", log_level, "trace|debug|info|warn|error|off")
+      ->capture_default_str();
   app.parse_complete_callback([&] { spdlog::set_level(spdlog::level::from_str(log_level)); });
   brakefit::cli::add_train_command(app);
   brakefit::cli::add_fit_command(app);
@@ -40,4 +43,15 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (...) {  // setting up logging or the parser failed
+    std::fputs("brakefit: internal error during start-up\n", stderr);
+    return 1;
+  }
 }

@@ -26,7 +26,8 @@ Curve sample_curve(const MfParams& p, const std::vector<double>& slip_ratio) {
 
 std::vector<double> even_slips(std::size_t n, double slip_max) {
   std::vector<double> s(n);
-  for (std::size_t i = 0; i < n; ++i) s[i] = slip_max * static_cast<double>(i + 1) / static_cast<double>(n);
+  for (std::size_t i = 0; i < n; ++i)
+    s[i] = slip_max * static_cast<double>(i + 1) / static_cast<double>(n);
   return s;
 }
 

@@ -8,13 +8,17 @@
 
 namespace brakefit {
 
-const char* to_string(SlipUnit u) { return u == SlipUnit::Percent ? "percent" : "ratio"; }
+const char* to_string(SlipUnit u) {
+  return u == SlipUnit::Percent ? "percent" : "ratio";
+}
 
 namespace {
 
 std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r'))
+    s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
+    s.remove_suffix(1);
   return s;
 }
 
@@ -23,7 +27,8 @@ std::vector<std::string_view> split(std::string_view line) {
   std::size_t start = 0;
   for (;;) {
     const auto comma = line.find(',', start);
-    out.push_back(trim(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start)));
+    out.push_back(
+        trim(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start)));
     if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
@@ -80,9 +85,11 @@ ParsedCurve parse_curve_csv(std::string_view text, const std::string& filename) 
       double v = 0.0;
       const auto [ptr, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), v);
       if (cell.empty() || ec != std::errc() || ptr != cell.data() + cell.size())
-        throw fail(line_no, fmt::format("column '{}': '{}' is not a number", name, std::string(cell)));
+        throw fail(line_no,
+                   fmt::format("column '{}': '{}' is not a number", name, std::string(cell)));
       if (!std::isfinite(v))
-        throw fail(line_no, fmt::format("column '{}': value '{}' is not finite", name, std::string(cell)));
+        throw fail(line_no,
+                   fmt::format("column '{}': value '{}' is not finite", name, std::string(cell)));
       return v;
     };
     const char* slip_name = out.input_unit == SlipUnit::Percent ? "slip_pct" : "slip";
@@ -90,14 +97,16 @@ ParsedCurve parse_curve_csv(std::string_view text, const std::string& filename) 
     const double force = number(force_col, "force_n");
     if (out.input_unit == SlipUnit::Percent) slip /= 100.0;
     if (slip < 0.0 || slip > 1.0)
-      throw fail(line_no, fmt::format("column '{}': slip {} is outside [0, 1] as a ratio ({})",
-                                      slip_name, std::string(cells[static_cast<std::size_t>(slip_col)]),
-                                      out.input_unit == SlipUnit::Percent ? "0..100 %" : "0..1"));
+      throw fail(line_no,
+                 fmt::format("column '{}': slip {} is outside [0, 1] as a ratio ({})", slip_name,
+                             std::string(cells[static_cast<std::size_t>(slip_col)]),
+                             out.input_unit == SlipUnit::Percent ? "0..100 %" : "0..1"));
     out.curve.slip_ratio.push_back(slip);
     out.curve.force_n.push_back(force);
     if (nl == text.size()) break;
   }
-  if (!have_header) throw fail(line_no, "no header line (expected 'slip,force_n' or 'slip_pct,force_n')");
+  if (!have_header)
+    throw fail(line_no, "no header line (expected 'slip,force_n' or 'slip_pct,force_n')");
   if (out.curve.size() < kMinCurvePoints)
     throw fail(line_no, fmt::format("only {} data points; at least {} are needed", out.curve.size(),
                                     kMinCurvePoints));

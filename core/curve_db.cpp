@@ -56,7 +56,8 @@ CurveDatabase generate_database(const DatabaseSettings& s, const std::vector<dou
   for (Eigen::Index i = 0; i < n; ++i) {
     std::size_t fi = 0;
     const MfParams p = draw_params(s, rng, &fi);
-    for (Eigen::Index k = 0; k < g; ++k) db.forces_n(i, k) = mf_force_n(p, grid[static_cast<std::size_t>(k)]);
+    for (Eigen::Index k = 0; k < g; ++k)
+      db.forces_n(i, k) = mf_force_n(p, grid[static_cast<std::size_t>(k)]);
     db.labels.push_back(p);
     db.family.push_back(fi);
   }

@@ -42,10 +42,10 @@ class Rng;
 MfParams draw_params(const DatabaseSettings& s, Rng& rng, std::size_t* family_index = nullptr);
 
 struct CurveDatabase {
-  std::vector<double> grid;          ///< slip ratios
-  Eigen::MatrixXd forces_n;          ///< N x G, row i = curve i on the grid
-  std::vector<MfParams> labels;      ///< the parameters of each curve
-  std::vector<std::size_t> family;   ///< index into settings.families
+  std::vector<double> grid;         ///< slip ratios
+  Eigen::MatrixXd forces_n;         ///< N x G, row i = curve i on the grid
+  std::vector<MfParams> labels;     ///< the parameters of each curve
+  std::vector<std::size_t> family;  ///< index into settings.families
 };
 
 CurveDatabase generate_database(const DatabaseSettings& s, const std::vector<double>& grid);

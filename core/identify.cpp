@@ -6,10 +6,14 @@ namespace brakefit {
 
 const char* to_string(Method m) {
   switch (m) {
-    case Method::Som: return "som";
-    case Method::Mlp: return "mlp";
-    case Method::Lm: return "lm";
-    case Method::Hybrid: return "hybrid";
+    case Method::Som:
+      return "som";
+    case Method::Mlp:
+      return "mlp";
+    case Method::Lm:
+      return "lm";
+    case Method::Hybrid:
+      return "hybrid";
   }
   return "?";
 }
@@ -79,7 +83,21 @@ MfParams identify_mlp(const Model& m, const Curve& c) {
   return p;
 }
 
-MethodResult run_method(Method method, const Model* model, const Curve& c, const fit::MfFitOptions& options) {
+fit::MfFitOptions fit_options_for(const Model* m) {
+  fit::MfFitOptions o;
+  if (!m) return o;
+  for (const auto& f : m->config.database.families) {
+    o.bounds.E_hi = std::max(o.bounds.E_hi, f.E.hi);
+    o.bounds.E_lo = std::min(o.bounds.E_lo, f.E.lo);
+    o.bounds.B_hi = std::max(o.bounds.B_hi, 2.0 * f.B.hi);
+    o.bounds.C_lo = std::min(o.bounds.C_lo, f.C.lo);
+    o.bounds.C_hi = std::max(o.bounds.C_hi, f.C.hi);
+  }
+  return o;
+}
+
+MethodResult run_method(Method method, const Model* model, const Curve& c,
+                        const fit::MfFitOptions& options) {
   MethodResult r;
   r.method = method;
   switch (method) {

@@ -17,10 +17,10 @@ namespace brakefit {
 
 struct Model {
   TrainConfig config;
-  std::vector<double> grid;               ///< slip ratios of the SOM / MLP input
+  std::vector<double> grid;  ///< slip ratios of the SOM / MLP input
   som::Som som;
-  std::vector<std::size_t> unit_hits;     ///< database curves mapped to each unit
-  std::vector<MfParams> unit_labels;      ///< mean parameters of those curves (valid where hits > 0)
+  std::vector<std::size_t> unit_hits;  ///< database curves mapped to each unit
+  std::vector<MfParams> unit_labels;   ///< mean parameters of those curves (valid where hits > 0)
   double som_qe = 0.0;
   double som_te = 0.0;
   mlp::Network mlp;
@@ -60,7 +60,12 @@ struct SomEstimate {
 SomEstimate identify_som(const Model& m, const Curve& c);
 MfParams identify_mlp(const Model& m, const Curve& c);
 
+/// Least-squares options for a model: the default bounds, widened to cover the model's database
+/// ranges (the paper preset has E up to 50, beyond the usual E <= 1).
+fit::MfFitOptions fit_options_for(const Model* m);
+
 /// Runs one method on a curve (som/mlp/hybrid need a trained model).
-MethodResult run_method(Method method, const Model* model, const Curve& c, const fit::MfFitOptions& options = {});
+MethodResult run_method(Method method, const Model* model, const Curve& c,
+                        const fit::MfFitOptions& options = {});
 
 }  // namespace brakefit

@@ -21,12 +21,12 @@ double mf_force_and_gradient(const MfParams& p, double slip_ratio, MfGradient& g
   const double cos_t = std::cos(theta);
   const double dF_dphi = p.D * cos_t * p.C / (1.0 + phi * phi);
   const double dphi_du = 1.0 - p.E * (u * u) / (1.0 + u * u);
-  grad[0] = dF_dphi * dphi_du * x;         // B
-  grad[1] = p.D * cos_t * atan_phi;        // C
-  grad[2] = sin_t;                         // D
-  grad[3] = -dF_dphi * (u - atan_u);       // E
-  grad[4] = dF_dphi * dphi_du * p.B;       // SHx
-  grad[5] = 1.0;                           // SVx
+  grad[0] = dF_dphi * dphi_du * x;    // B
+  grad[1] = p.D * cos_t * atan_phi;   // C
+  grad[2] = sin_t;                    // D
+  grad[3] = -dF_dphi * (u - atan_u);  // E
+  grad[4] = dF_dphi * dphi_du * p.B;  // SHx
+  grad[5] = 1.0;                      // SVx
   return p.D * sin_t + p.SVx;
 }
 

@@ -8,12 +8,12 @@
 namespace brakefit {
 
 struct MfParams {
-  double B = 10.0;   ///< stiffness factor, per unit slip ratio
-  double C = 1.5;    ///< shape factor
-  double D = 1000.0; ///< peak factor, N
-  double E = 0.0;    ///< curvature factor
-  double SHx = 0.0;  ///< horizontal shift, slip ratio
-  double SVx = 0.0;  ///< vertical shift, N
+  double B = 10.0;    ///< stiffness factor, per unit slip ratio
+  double C = 1.5;     ///< shape factor
+  double D = 1000.0;  ///< peak factor, N
+  double E = 0.0;     ///< curvature factor
+  double SHx = 0.0;   ///< horizontal shift, slip ratio
+  double SVx = 0.0;   ///< vertical shift, N
 };
 
 inline constexpr std::size_t kMfParamCount = 6;

@@ -19,9 +19,9 @@ struct FitMetrics {
   std::size_t mape_points_used = 0;
   std::size_t mape_points_excluded = 0;
   double rmse_n = 0.0;
-  double rmse_pct_peak = 0.0;        ///< RMSE as % of the measured peak
-  double peak_force_error_n = 0.0;   ///< model peak - measured peak (within the data's slip range)
-  double peak_slip_error_ratio = 0.0;///< slip at model peak - slip at measured peak
+  double rmse_pct_peak = 0.0;       ///< RMSE as % of the measured peak
+  double peak_force_error_n = 0.0;  ///< model peak - measured peak (within the data's slip range)
+  double peak_slip_error_ratio = 0.0;  ///< slip at model peak - slip at measured peak
 };
 
 FitMetrics compute_metrics(const Curve& measured, const MfParams& p);

@@ -51,7 +51,9 @@ json body_of(const Model& m) {
   mlp["layers"] = m.mlp.layers();
   const Eigen::VectorXd w = m.mlp.parameters();
   mlp["parameters"] = std::vector<double>(w.data(), w.data() + w.size());
-  auto vec = [](const Eigen::RowVectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
+  auto vec = [](const Eigen::RowVectorXd& v) {
+    return std::vector<double>(v.data(), v.data() + v.size());
+  };
   mlp["input_mean"] = vec(m.mlp_in.mean);
   mlp["input_scale"] = vec(m.mlp_in.scale);
   mlp["output_mean"] = vec(m.mlp_out.mean);
@@ -82,7 +84,9 @@ std::string serialize_model(Model& m) {
 }
 
 Model deserialize_model(std::string_view text, const std::string& source) {
-  auto fail = [&](const std::string& msg) { return InputError(fmt::format("{}: {}", source, msg)); };
+  auto fail = [&](const std::string& msg) {
+    return InputError(fmt::format("{}: {}", source, msg));
+  };
   json body;
   try {
     body = json::parse(text);
@@ -93,18 +97,22 @@ Model deserialize_model(std::string_view text, const std::string& source) {
     throw fail(fmt::format("not a brakefit model (schema is not '{}')", kModelSchema));
   if (!body.contains("format_version") || !body["format_version"].is_number_integer() ||
       body["format_version"].get<int>() != kModelFormatVersion)
-    throw fail(fmt::format("model format version {} is not supported (this brakefit reads {})",
-                           body.contains("format_version") ? body["format_version"].dump() : "missing",
-                           kModelFormatVersion));
-  if (!body.contains("checksum") || !body["checksum"].is_string()) throw fail("model has no checksum");
+    throw fail(
+        fmt::format("model format version {} is not supported (this brakefit reads {})",
+                    body.contains("format_version") ? body["format_version"].dump() : "missing",
+                    kModelFormatVersion));
+  if (!body.contains("checksum") || !body["checksum"].is_string())
+    throw fail("model has no checksum");
   const std::string stored = body["checksum"].get<std::string>();
   body.erase("checksum");
   const std::string actual = sha256_hex(body.dump());
-  if (stored != actual) throw fail("model is corrupt: checksum mismatch (the file was changed after training)");
+  if (stored != actual)
+    throw fail("model is corrupt: checksum mismatch (the file was changed after training)");
   Model m;
   m.hash = actual;
   try {
-    m.config = parse_train_config(body.at("config_toml").get<std::string>(), source + " (config_toml)");
+    m.config =
+        parse_train_config(body.at("config_toml").get<std::string>(), source + " (config_toml)");
     m.grid = body.at("grid").get<std::vector<double>>();
     if (m.grid != default_slip_grid())
       throw fail("model slip grid does not match this brakefit's grid (retrain the model)");
@@ -112,15 +120,18 @@ Model deserialize_model(std::string_view text, const std::string& source) {
     const auto rows = s.at("rows").get<std::size_t>(), cols = s.at("cols").get<std::size_t>();
     const auto cb = s.at("codebook").get<std::vector<std::vector<double>>>();
     if (cb.size() != rows * cols) throw fail("SOM codebook size does not match rows x cols");
-    Eigen::MatrixXd codebook(static_cast<Eigen::Index>(cb.size()), static_cast<Eigen::Index>(m.grid.size()));
+    Eigen::MatrixXd codebook(static_cast<Eigen::Index>(cb.size()),
+                             static_cast<Eigen::Index>(m.grid.size()));
     for (std::size_t i = 0; i < cb.size(); ++i) {
-      if (cb[i].size() != m.grid.size()) throw fail("SOM codebook dimension does not match the slip grid");
+      if (cb[i].size() != m.grid.size())
+        throw fail("SOM codebook dimension does not match the slip grid");
       codebook.row(static_cast<Eigen::Index>(i)) = row_from(cb[i]);
     }
     m.som = som::Som(som::HexLattice(rows, cols), std::move(codebook));
     m.unit_hits = s.at("unit_hits").get<std::vector<std::size_t>>();
     const auto labels = s.at("unit_labels").get<std::vector<std::array<double, 4>>>();
-    if (m.unit_hits.size() != cb.size() || labels.size() != cb.size()) throw fail("SOM labels do not match the map size");
+    if (m.unit_hits.size() != cb.size() || labels.size() != cb.size())
+      throw fail("SOM labels do not match the map size");
     for (const auto& l : labels) m.unit_labels.push_back(MfParams{l[0], l[1], l[2], l[3], 0, 0});
     m.som_qe = s.at("qe").get<double>();
     m.som_te = s.at("te").get<double>();
@@ -130,14 +141,17 @@ Model deserialize_model(std::string_view text, const std::string& source) {
       throw fail("MLP layer sizes do not match the slip grid and the 3 outputs");
     m.mlp = mlp::Network(layers, 0);
     const auto w = n.at("parameters").get<std::vector<double>>();
-    if (w.size() != m.mlp.parameter_count()) throw fail("MLP parameter count does not match its layers");
-    m.mlp.set_parameters(Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())));
+    if (w.size() != m.mlp.parameter_count())
+      throw fail("MLP parameter count does not match its layers");
+    m.mlp.set_parameters(
+        Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())));
     m.mlp_in = {row_from(n.at("input_mean").get<std::vector<double>>()),
                 row_from(n.at("input_scale").get<std::vector<double>>())};
     m.mlp_out = {row_from(n.at("output_mean").get<std::vector<double>>()),
                  row_from(n.at("output_scale").get<std::vector<double>>())};
-    if (m.mlp_in.mean.size() != static_cast<Eigen::Index>(layers.front()) || m.mlp_in.scale.size() != m.mlp_in.mean.size() ||
-        m.mlp_out.mean.size() != 3 || m.mlp_out.scale.size() != 3)
+    if (m.mlp_in.mean.size() != static_cast<Eigen::Index>(layers.front()) ||
+        m.mlp_in.scale.size() != m.mlp_in.mean.size() || m.mlp_out.mean.size() != 3 ||
+        m.mlp_out.scale.size() != 3)
       throw fail("MLP scaler sizes do not match the network");
     const json& r = n.at("report");
     m.mlp_report.epochs = r.at("epochs").get<std::size_t>();

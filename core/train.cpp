@@ -35,7 +35,8 @@ void label_units(Model& m, const CurveDatabase& db, const Eigen::MatrixXd& som_d
   for (std::size_t i = 0; i < u; ++i) {
     if (!m.unit_hits[i]) continue;
     const double n = static_cast<double>(m.unit_hits[i]);
-    m.unit_labels[i] = MfParams{sums[i][0] / n, sums[i][1] / n, sums[i][2] / n, sums[i][3] / n, 0, 0};
+    m.unit_labels[i] =
+        MfParams{sums[i][0] / n, sums[i][1] / n, sums[i][2] / n, sums[i][3] / n, 0, 0};
   }
   m.som_qe = m.som.quantization_error(som_data);
   m.som_te = m.som.topographic_error(som_data);

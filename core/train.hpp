@@ -9,7 +9,8 @@
 namespace brakefit {
 
 /// stage: "som-rough", "som-fine", "mlp"; done/total within the stage; loss for mlp (else NaN).
-using TrainProgress = std::function<void(const std::string& stage, std::size_t done, std::size_t total, double loss)>;
+using TrainProgress =
+    std::function<void(const std::string& stage, std::size_t done, std::size_t total, double loss)>;
 
 /// The SOM input matrix for a database (rows = curves): peak-normalised shapes or raw forces.
 Eigen::MatrixXd som_input_matrix(const CurveDatabase& db, SomInput input);

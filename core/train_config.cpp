@@ -3,14 +3,16 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include <set>
 #include <toml++/toml.h>
+#include <set>
 
 #include "core/curve.hpp"
 
 namespace brakefit {
 
-const char* to_string(SomInput s) { return s == SomInput::Shape ? "shape" : "raw"; }
+const char* to_string(SomInput s) {
+  return s == SomInput::Shape ? "shape" : "raw";
+}
 
 namespace {
 
@@ -20,32 +22,41 @@ class Reader {
   [[noreturn]] void fail(const std::string& key, const std::string& msg) const {
     throw InputError(fmt::format("{}: key '{}': {}", source_, key, msg));
   }
-  void check_keys(const toml::table& t, const std::string& prefix, const std::set<std::string>& allowed) const {
+  void check_keys(const toml::table& t, const std::string& prefix,
+                  const std::set<std::string>& allowed) const {
     for (const auto& [k, v] : t) {
       if (!allowed.count(std::string(k.str())))
-        fail(prefix + std::string(k.str()), fmt::format("unknown key (allowed: {})", fmt::join(allowed, ", ")));
+        fail(prefix + std::string(k.str()),
+             fmt::format("unknown key (allowed: {})", fmt::join(allowed, ", ")));
     }
   }
-  double number(const toml::table& t, const std::string& prefix, const char* key, double def, double lo, double hi) const {
+  double number(const toml::table& t, const std::string& prefix, const char* key, double def,
+                double lo, double hi) const {
     const auto* node = t.get(key);
     if (!node) return def;
     double v = 0;
-    if (auto i = node->value_exact<int64_t>()) v = static_cast<double>(*i);
-    else if (auto d = node->value_exact<double>()) v = *d;
-    else fail(prefix + key, "expected a number");
-    if (!(v >= lo && v <= hi)) fail(prefix + key, fmt::format("value {} is outside [{}, {}]", v, lo, hi));
+    if (auto i = node->value_exact<int64_t>())
+      v = static_cast<double>(*i);
+    else if (auto d = node->value_exact<double>())
+      v = *d;
+    else
+      fail(prefix + key, "expected a number");
+    if (!(v >= lo && v <= hi))
+      fail(prefix + key, fmt::format("value {} is outside [{}, {}]", v, lo, hi));
     return v;
   }
-  std::int64_t integer(const toml::table& t, const std::string& prefix, const char* key, std::int64_t def,
-                       std::int64_t lo, std::int64_t hi) const {
+  std::int64_t integer(const toml::table& t, const std::string& prefix, const char* key,
+                       std::int64_t def, std::int64_t lo, std::int64_t hi) const {
     const auto* node = t.get(key);
     if (!node) return def;
     auto i = node->value_exact<int64_t>();
     if (!i) fail(prefix + key, "expected an integer");
-    if (*i < lo || *i > hi) fail(prefix + key, fmt::format("value {} is outside [{}, {}]", *i, lo, hi));
+    if (*i < lo || *i > hi)
+      fail(prefix + key, fmt::format("value {} is outside [{}, {}]", *i, lo, hi));
     return *i;
   }
-  std::string string(const toml::table& t, const std::string& prefix, const char* key, const std::string& def) const {
+  std::string string(const toml::table& t, const std::string& prefix, const char* key,
+                     const std::string& def) const {
     const auto* node = t.get(key);
     if (!node) return def;
     auto s = node->value_exact<std::string>();
@@ -60,9 +71,12 @@ class Reader {
     double* out[2] = {&r.lo, &r.hi};
     for (std::size_t i = 0; i < 2; ++i) {
       const auto& n = (*arr)[i];
-      if (auto iv = n.value_exact<int64_t>()) *out[i] = static_cast<double>(*iv);
-      else if (auto dv = n.value_exact<double>()) *out[i] = *dv;
-      else fail(prefix + key, "range values must be numbers");
+      if (auto iv = n.value_exact<int64_t>())
+        *out[i] = static_cast<double>(*iv);
+      else if (auto dv = n.value_exact<double>())
+        *out[i] = *dv;
+      else
+        fail(prefix + key, "range values must be numbers");
     }
     if (!(r.lo <= r.hi)) fail(prefix + key, "low must not exceed high");
     return r;
@@ -80,8 +94,8 @@ TrainConfig parse_train_config(std::string_view text, const std::string& source)
   try {
     root = toml::parse(text, source);
   } catch (const toml::parse_error& e) {
-    throw InputError(fmt::format("{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column,
-                                 std::string(e.description())));
+    throw InputError(fmt::format("{}:{}:{}: {}", source, e.source().begin.line,
+                                 e.source().begin.column, std::string(e.description())));
   }
   Reader rd(source);
   rd.check_keys(root, "", {"database", "som", "mlp"});
@@ -94,11 +108,14 @@ TrainConfig parse_train_config(std::string_view text, const std::string& source)
     } catch (const InputError& e) {
       rd.fail("database.preset", e.what());
     }
-    c.database.seed = static_cast<std::uint64_t>(rd.integer(*db, "database.", "seed", 20261121, 0, INT64_MAX));
-    c.database.n_curves = static_cast<std::size_t>(rd.integer(*db, "database.", "curves", 2000, 10, 1000000));
+    c.database.seed =
+        static_cast<std::uint64_t>(rd.integer(*db, "database.", "seed", 20261121, 0, INT64_MAX));
+    c.database.n_curves =
+        static_cast<std::size_t>(rd.integer(*db, "database.", "curves", 2000, 10, 1000000));
     if (const auto* node = db->get("family")) {
       const auto* arr = node->as_array();
-      if (!arr || !arr->is_array_of_tables()) rd.fail("database.family", "expected [[database.family]] tables");
+      if (!arr || !arr->is_array_of_tables())
+        rd.fail("database.family", "expected [[database.family]] tables");
       c.database.families.clear();
       for (std::size_t i = 0; i < arr->size(); ++i) {
         const auto& t = *(*arr)[i].as_table();
@@ -120,20 +137,27 @@ TrainConfig parse_train_config(std::string_view text, const std::string& source)
   }
   if (const auto* s = root.get_as<toml::table>("som")) {
     const std::string p = "som.";
-    rd.check_keys(*s, p, {"rows", "cols", "input", "init", "algorithm", "neighbourhood", "rough_epochs",
-                          "fine_epochs", "rough_radius", "fine_radius", "rough_alpha", "fine_alpha", "seed"});
+    rd.check_keys(
+        *s, p,
+        {"rows", "cols", "input", "init", "algorithm", "neighbourhood", "rough_epochs",
+         "fine_epochs", "rough_radius", "fine_radius", "rough_alpha", "fine_alpha", "seed"});
     c.som.rows = static_cast<std::size_t>(rd.integer(*s, p, "rows", 10, 2, 200));
     c.som.cols = static_cast<std::size_t>(rd.integer(*s, p, "cols", 10, 2, 200));
     const std::string input = rd.string(*s, p, "input", "shape");
-    if (input == "shape") c.som_input = SomInput::Shape;
-    else if (input == "raw") c.som_input = SomInput::Raw;
-    else rd.fail(p + "input", "expected 'shape' or 'raw'");
-    if (!som::parse(rd.string(*s, p, "init", "random"), c.som.init)) rd.fail(p + "init", "expected 'random' or 'linear'");
+    if (input == "shape")
+      c.som_input = SomInput::Shape;
+    else if (input == "raw")
+      c.som_input = SomInput::Raw;
+    else
+      rd.fail(p + "input", "expected 'shape' or 'raw'");
+    if (!som::parse(rd.string(*s, p, "init", "random"), c.som.init))
+      rd.fail(p + "init", "expected 'random' or 'linear'");
     if (!som::parse(rd.string(*s, p, "algorithm", "batch"), c.som.algorithm))
       rd.fail(p + "algorithm", "expected 'batch' or 'sequential'");
     if (!som::parse(rd.string(*s, p, "neighbourhood", "gaussian"), c.som.neighbourhood))
       rd.fail(p + "neighbourhood", "expected 'gaussian', 'cutgauss', 'ep' or 'bubble'");
-    c.som.rough.epochs = static_cast<std::size_t>(rd.integer(*s, p, "rough_epochs", 1000, 0, 1000000));
+    c.som.rough.epochs =
+        static_cast<std::size_t>(rd.integer(*s, p, "rough_epochs", 1000, 0, 1000000));
     c.som.fine.epochs = static_cast<std::size_t>(rd.integer(*s, p, "fine_epochs", 500, 0, 1000000));
     if (s->get("rough_radius")) {
       const auto r = rd.range(*s, p, "rough_radius");
@@ -151,15 +175,17 @@ TrainConfig parse_train_config(std::string_view text, const std::string& source)
   }
   if (const auto* m = root.get_as<toml::table>("mlp")) {
     const std::string p = "mlp.";
-    rd.check_keys(*m, p, {"hidden", "trainer", "max_epochs", "validation_fraction", "patience", "learning_rate",
-                          "momentum", "truncate_fraction", "truncate_range", "seed"});
+    rd.check_keys(*m, p,
+                  {"hidden", "trainer", "max_epochs", "validation_fraction", "patience",
+                   "learning_rate", "momentum", "truncate_fraction", "truncate_range", "seed"});
     if (const auto* h = m->get("hidden")) {
       const auto* arr = h->as_array();
       if (!arr || arr->empty()) rd.fail(p + "hidden", "expected a non-empty array of layer sizes");
       c.mlp.hidden.clear();
       for (const auto& n : *arr) {
         auto v = n.value_exact<int64_t>();
-        if (!v || *v < 1 || *v > 4096) rd.fail(p + "hidden", "layer sizes must be integers in [1, 4096]");
+        if (!v || *v < 1 || *v > 4096)
+          rd.fail(p + "hidden", "layer sizes must be integers in [1, 4096]");
         c.mlp.hidden.push_back(static_cast<std::size_t>(*v));
       }
     }
@@ -187,28 +213,38 @@ std::string format_train_config(const TrainConfig& c) {
   auto r = [](const ParamRange& pr) { return fmt::format("[{}, {}]", pr.lo, pr.hi); };
   std::string s;
   s += "[database]\n";
-  s += fmt::format("preset = \"{}\"\nseed = {}\ncurves = {}\n", c.database.preset, c.database.seed, c.database.n_curves);
+  s += fmt::format("preset = \"{}\"\nseed = {}\ncurves = {}\n", c.database.preset, c.database.seed,
+                   c.database.n_curves);
   for (const auto& f : c.database.families) {
-    s += fmt::format("\n[[database.family]]\nname = \"{}\"\nweight = {}\nB = {}\nC = {}\nD_n = {}\nE = {}\n", f.name,
-                     fmt::format("{:.17g}", f.weight), r(f.B), r(f.C), r(f.D_n), r(f.E));
+    s += fmt::format(
+        "\n[[database.family]]\nname = \"{}\"\nweight = {}\nB = {}\nC = {}\nD_n = {}\nE = {}\n",
+        f.name, fmt::format("{:.17g}", f.weight), r(f.B), r(f.C), r(f.D_n), r(f.E));
   }
   const auto& m = c.som;
   s += "\n[som]\n";
-  s += fmt::format("rows = {}\ncols = {}\ninput = \"{}\"\ninit = \"{}\"\nalgorithm = \"{}\"\nneighbourhood = \"{}\"\n",
-                   m.rows, m.cols, to_string(c.som_input), som::to_string(m.init), som::to_string(m.algorithm),
-                   som::to_string(m.neighbourhood));
+  s += fmt::format(
+      "rows = {}\ncols = {}\ninput = \"{}\"\ninit = \"{}\"\nalgorithm = \"{}\"\nneighbourhood = "
+      "\"{}\"\n",
+      m.rows, m.cols, to_string(c.som_input), som::to_string(m.init), som::to_string(m.algorithm),
+      som::to_string(m.neighbourhood));
   s += fmt::format("rough_epochs = {}\nfine_epochs = {}\n", m.rough.epochs, m.fine.epochs);
-  if (m.rough.radius_ini > 0) s += fmt::format("rough_radius = [{}, {}]\n", m.rough.radius_fin, m.rough.radius_ini);
-  if (m.fine.radius_ini > 0) s += fmt::format("fine_radius = [{}, {}]\n", m.fine.radius_fin, m.fine.radius_ini);
-  s += fmt::format("rough_alpha = {}\nfine_alpha = {}\nseed = {}\n", m.rough.alpha_ini, m.fine.alpha_ini, m.seed);
+  if (m.rough.radius_ini > 0)
+    s += fmt::format("rough_radius = [{}, {}]\n", m.rough.radius_fin, m.rough.radius_ini);
+  if (m.fine.radius_ini > 0)
+    s += fmt::format("fine_radius = [{}, {}]\n", m.fine.radius_fin, m.fine.radius_ini);
+  s += fmt::format("rough_alpha = {}\nfine_alpha = {}\nseed = {}\n", m.rough.alpha_ini,
+                   m.fine.alpha_ini, m.seed);
   const auto& n = c.mlp;
   s += "\n[mlp]\n";
-  s += fmt::format("hidden = [{}]\ntrainer = \"{}\"\nmax_epochs = {}\nvalidation_fraction = {}\npatience = {}\n",
-                   fmt::join(n.hidden, ", "), mlp::to_string(n.trainer), n.max_epochs, n.validation_fraction,
-                   n.patience);
-  s += fmt::format("learning_rate = {}\nmomentum = {}\ntruncate_fraction = {}\ntruncate_range = [{}, {}]\nseed = {}\n",
-                   n.learning_rate, n.momentum, c.mlp_truncate_fraction, c.mlp_truncate_min_ratio,
-                   c.mlp_truncate_max_ratio, n.seed);
+  s += fmt::format(
+      "hidden = [{}]\ntrainer = \"{}\"\nmax_epochs = {}\nvalidation_fraction = {}\npatience = {}\n",
+      fmt::join(n.hidden, ", "), mlp::to_string(n.trainer), n.max_epochs, n.validation_fraction,
+      n.patience);
+  s += fmt::format(
+      "learning_rate = {}\nmomentum = {}\ntruncate_fraction = {}\ntruncate_range = [{}, {}]\nseed "
+      "= {}\n",
+      n.learning_rate, n.momentum, c.mlp_truncate_fraction, c.mlp_truncate_min_ratio,
+      c.mlp_truncate_max_ratio, n.seed);
   // Integers that look like floats must stay floats in TOML ("weight = 1" would re-parse as an
   // integer, which is accepted for numbers), so nothing more is needed here.
   return s;

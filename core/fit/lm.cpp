@@ -8,33 +8,41 @@ namespace brakefit::fit {
 
 const char* to_string(LmStatus s) {
   switch (s) {
-    case LmStatus::Gradient: return "gradient";
-    case LmStatus::Step: return "step";
-    case LmStatus::Cost: return "cost";
-    case LmStatus::MaxIterations: return "max_iterations";
-    case LmStatus::Stuck: return "stuck";
+    case LmStatus::Gradient:
+      return "gradient";
+    case LmStatus::Step:
+      return "step";
+    case LmStatus::Cost:
+      return "cost";
+    case LmStatus::MaxIterations:
+      return "max_iterations";
+    case LmStatus::Stuck:
+      return "stuck";
   }
   return "?";
 }
 
 namespace {
 
-Eigen::VectorXd clamp(const Eigen::VectorXd& x, const Eigen::VectorXd& lo, const Eigen::VectorXd& hi) {
+Eigen::VectorXd clamp(const Eigen::VectorXd& x, const Eigen::VectorXd& lo,
+                      const Eigen::VectorXd& hi) {
   return x.cwiseMax(lo).cwiseMin(hi);
 }
 
-std::vector<bool> free_set(const Eigen::VectorXd& x, const Eigen::VectorXd& g, const Eigen::VectorXd& lo,
-                           const Eigen::VectorXd& hi) {
+std::vector<bool> free_set(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
+                           const Eigen::VectorXd& lo, const Eigen::VectorXd& hi) {
   std::vector<bool> free(static_cast<std::size_t>(x.size()));
   for (Eigen::Index i = 0; i < x.size(); ++i)
-    free[static_cast<std::size_t>(i)] = !((x(i) <= lo(i) && g(i) > 0) || (x(i) >= hi(i) && g(i) < 0));
+    free[static_cast<std::size_t>(i)] =
+        !((x(i) <= lo(i) && g(i) > 0) || (x(i) >= hi(i) && g(i) < 0));
   return free;
 }
 
 }  // namespace
 
-LmResult minimize(const LeastSquaresProblem& problem, Eigen::VectorXd x0, const Eigen::VectorXd& lower,
-                  const Eigen::VectorXd& upper, const LmOptions& opt) {
+LmResult minimize(const LeastSquaresProblem& problem, const Eigen::VectorXd& x0,
+                  const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                  const LmOptions& opt) {
   const Eigen::Index n = x0.size();
   const Eigen::Index m = problem.residual_count();
   LmResult res;
@@ -140,12 +148,14 @@ LmResult minimize(const LeastSquaresProblem& problem, Eigen::VectorXd x0, const 
   if (p > 0 && m > p) {
     Eigen::MatrixXd af(p, p);
     for (Eigen::Index u = 0; u < p; ++u)
-      for (Eigen::Index v = 0; v < p; ++v) af(u, v) = a(idx[static_cast<std::size_t>(u)], idx[static_cast<std::size_t>(v)]);
+      for (Eigen::Index v = 0; v < p; ++v)
+        af(u, v) = a(idx[static_cast<std::size_t>(u)], idx[static_cast<std::size_t>(v)]);
     Eigen::FullPivLU<Eigen::MatrixXd> lu(af);
     if (lu.isInvertible()) {
       const Eigen::MatrixXd cov = lu.inverse() * (f / static_cast<double>(m - p));
       for (Eigen::Index u = 0; u < p; ++u)
-        if (cov(u, u) >= 0) res.standard_errors(idx[static_cast<std::size_t>(u)]) = std::sqrt(cov(u, u));
+        if (cov(u, u) >= 0)
+          res.standard_errors(idx[static_cast<std::size_t>(u)]) = std::sqrt(cov(u, u));
     }
   }
   return res;

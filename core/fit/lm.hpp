@@ -33,14 +33,15 @@ struct LmResult {
   int iterations = 0;
   LmStatus status = LmStatus::MaxIterations;
   bool converged = false;
-  Eigen::MatrixXd jtj;          ///< J^T J at the solution
-  std::vector<bool> at_bound;   ///< parameters held at a bound at the end
+  Eigen::MatrixXd jtj;         ///< J^T J at the solution
+  std::vector<bool> at_bound;  ///< parameters held at a bound at the end
   /// Standard errors sqrt(diag(s^2 (J^T J)^-1)) over the free parameters, s^2 = ssr/(n - p);
   /// NaN for parameters at a bound or when J^T J is singular.
   Eigen::VectorXd standard_errors;
 };
 
-LmResult minimize(const LeastSquaresProblem& problem, Eigen::VectorXd x0, const Eigen::VectorXd& lower,
-                  const Eigen::VectorXd& upper, const LmOptions& options = {});
+LmResult minimize(const LeastSquaresProblem& problem, const Eigen::VectorXd& x0,
+                  const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                  const LmOptions& options = {});
 
 }  // namespace brakefit::fit

@@ -12,14 +12,16 @@ class MfProblem final : public LeastSquaresProblem {
   MfProblem(const Curve& c, bool shifts) : c_(c), n_params_(shifts ? 6 : 4) {}
   Eigen::Index residual_count() const override { return static_cast<Eigen::Index>(c_.size()); }
   void evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* j) const override {
-    const MfParams p = from_array(std::span<const double>(x.data(), static_cast<std::size_t>(x.size())));
+    const MfParams p =
+        from_array(std::span<const double>(x.data(), static_cast<std::size_t>(x.size())));
     MfGradient grad;
     for (std::size_t i = 0; i < c_.size(); ++i) {
       const auto row = static_cast<Eigen::Index>(i);
       if (j) {
         const double f = mf_force_and_gradient(p, c_.slip_ratio[i], grad);
         r(row) = f - c_.force_n[i];
-        for (Eigen::Index k = 0; k < n_params_; ++k) (*j)(row, k) = grad[static_cast<std::size_t>(k)];
+        for (Eigen::Index k = 0; k < n_params_; ++k)
+          (*j)(row, k) = grad[static_cast<std::size_t>(k)];
       } else {
         r(row) = mf_force_n(p, c_.slip_ratio[i]) - c_.force_n[i];
       }
@@ -65,7 +67,8 @@ MfFitResult fit_mf(const Curve& c, const MfParams& start, const MfFitOptions& o)
   MfFitResult out;
   out.params = from_array(std::span<const double>(lm.x.data(), static_cast<std::size_t>(np)));
   out.stderr_.fill(NAN);
-  for (Eigen::Index k = 0; k < np; ++k) out.stderr_[static_cast<std::size_t>(k)] = lm.standard_errors(k);
+  for (Eigen::Index k = 0; k < np; ++k)
+    out.stderr_[static_cast<std::size_t>(k)] = lm.standard_errors(k);
   out.ssr = lm.ssr;
   out.rmse_n = c.size() ? std::sqrt(lm.ssr / static_cast<double>(c.size())) : NAN;
   out.iterations = lm.iterations;

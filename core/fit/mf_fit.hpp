@@ -11,12 +11,12 @@
 namespace brakefit::fit {
 
 struct MfBounds {
-  double B_lo = 0.1, B_hi = 200.0;        ///< per unit slip ratio
+  double B_lo = 0.1, B_hi = 200.0;  ///< per unit slip ratio
   double C_lo = 0.3, C_hi = 3.0;
   double D_lo_factor = 0.0, D_hi_factor = 5.0;  ///< times the measured peak |force|
-  double E_lo = -20.0, E_hi = 1.0;         ///< standard implementations clamp E <= 1
-  double SHx_abs = 0.05;                   ///< slip ratio
-  double SVx_abs_factor = 0.2;             ///< times the measured peak |force|
+  double E_lo = -20.0, E_hi = 1.0;              ///< standard implementations clamp E <= 1
+  double SHx_abs = 0.05;                        ///< slip ratio
+  double SVx_abs_factor = 0.2;                  ///< times the measured peak |force|
 };
 
 struct MfFitOptions {

@@ -11,9 +11,12 @@ namespace brakefit::mlp {
 
 const char* to_string(Trainer t) {
   switch (t) {
-    case Trainer::Rprop: return "rprop";
-    case Trainer::GradientDescent: return "gd";
-    case Trainer::LevenbergMarquardt: return "lm";
+    case Trainer::Rprop:
+      return "rprop";
+    case Trainer::GradientDescent:
+      return "gd";
+    case Trainer::LevenbergMarquardt:
+      return "lm";
   }
   return "?";
 }
@@ -27,7 +30,8 @@ bool parse(const std::string& s, Trainer& out) {
 Scaler Scaler::fit(const Eigen::MatrixXd& x) {
   Scaler s;
   s.mean = x.colwise().mean();
-  s.scale = ((x.rowwise() - s.mean).array().square().colwise().sum() / std::max<double>(1.0, static_cast<double>(x.rows())))
+  s.scale = ((x.rowwise() - s.mean).array().square().colwise().sum() /
+             std::max<double>(1.0, static_cast<double>(x.rows())))
                 .sqrt()
                 .matrix();
   for (Eigen::Index k = 0; k < s.scale.size(); ++k)
@@ -46,7 +50,8 @@ Eigen::MatrixXd Scaler::invert(const Eigen::MatrixXd& z) const {
 Network::Network(std::vector<std::size_t> layers, std::uint64_t seed) : layers_(std::move(layers)) {
   Rng rng(seed);
   for (std::size_t l = 0; l + 1 < layers_.size(); ++l) {
-    const auto in = static_cast<Eigen::Index>(layers_[l]), out = static_cast<Eigen::Index>(layers_[l + 1]);
+    const auto in = static_cast<Eigen::Index>(layers_[l]),
+               out = static_cast<Eigen::Index>(layers_[l + 1]);
     const double lim = std::sqrt(6.0 / static_cast<double>(in + out));
     Eigen::MatrixXd w(out, in);
     for (Eigen::Index i = 0; i < out; ++i)
@@ -58,7 +63,8 @@ Network::Network(std::vector<std::size_t> layers, std::uint64_t seed) : layers_(
 
 std::size_t Network::parameter_count() const {
   std::size_t n = 0;
-  for (std::size_t l = 0; l < w_.size(); ++l) n += static_cast<std::size_t>(w_[l].size() + b_[l].size());
+  for (std::size_t l = 0; l < w_.size(); ++l)
+    n += static_cast<std::size_t>(w_[l].size() + b_[l].size());
   return n;
 }
 
@@ -101,7 +107,8 @@ Eigen::MatrixXd Network::predict(const Eigen::MatrixXd& x) const {
   return forward(x.transpose()).back().transpose();
 }
 
-Eigen::VectorXd Network::gradient(const Eigen::MatrixXd& xt, const Eigen::MatrixXd& yt, double* mse) const {
+Eigen::VectorXd Network::gradient(const Eigen::MatrixXd& xt, const Eigen::MatrixXd& yt,
+                                  double* mse) const {
   const auto a = forward(xt);
   const double norm = static_cast<double>(yt.size());
   Eigen::MatrixXd delta = a.back() - yt;
@@ -119,13 +126,14 @@ Eigen::VectorXd Network::gradient(const Eigen::MatrixXd& xt, const Eigen::Matrix
     const Eigen::MatrixXd gw = delta * a[l].transpose();
     g.segment(off[l], gw.size()) = Eigen::Map<const Eigen::VectorXd>(gw.data(), gw.size());
     g.segment(off[l] + gw.size(), b_[l].size()) = delta.rowwise().sum();
-    if (l > 0) delta = ((w_[l].transpose() * delta).array() * (1.0 - a[l].array().square())).matrix();
+    if (l > 0)
+      delta = ((w_[l].transpose() * delta).array() * (1.0 - a[l].array().square())).matrix();
   }
   return g;
 }
 
-void Network::gauss_newton(const Eigen::MatrixXd& xt, const Eigen::MatrixXd& yt, Eigen::MatrixXd& jtj,
-                           Eigen::VectorXd& jte, double* sse) const {
+void Network::gauss_newton(const Eigen::MatrixXd& xt, const Eigen::MatrixXd& yt,
+                           Eigen::MatrixXd& jtj, Eigen::VectorXd& jte, double* sse) const {
   const auto a = forward(xt);
   const Eigen::MatrixXd err = a.back() - yt;
   if (sse) *sse += err.squaredNorm();
@@ -152,7 +160,8 @@ void Network::gauss_newton(const Eigen::MatrixXd& xt, const Eigen::MatrixXd& yt,
           j.row(row).segment(off[l] + k * ol, ol) = delta.col(s).transpose() * a[l](k, s);
         j.row(row).segment(off[l] + ol * in, ol) = delta.col(s).transpose();
       }
-      if (l > 0) delta = ((w_[l].transpose() * delta).array() * (1.0 - a[l].array().square())).matrix();
+      if (l > 0)
+        delta = ((w_[l].transpose() * delta).array() * (1.0 - a[l].array().square())).matrix();
     }
   }
   Eigen::VectorXd e(outs * n);
@@ -170,17 +179,20 @@ double mse_of(const Network& net, const Eigen::MatrixXd& xt, const Eigen::Matrix
 
 }  // namespace
 
-TrainReport train(Network& net, const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const TrainSettings& s,
-                  const Progress& progress) {
+TrainReport train(Network& net, const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
+                  const TrainSettings& s, const Progress& progress) {
   const auto n = static_cast<std::size_t>(x.rows());
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
   Rng rng(s.seed ^ 0xA5A5A5A5ULL);
   for (std::size_t i = n; i > 1; --i) std::swap(order[i - 1], order[rng.index(i)]);
-  const auto n_val = static_cast<std::size_t>(std::floor(s.validation_fraction * static_cast<double>(n)));
+  const auto n_val =
+      static_cast<std::size_t>(std::floor(s.validation_fraction * static_cast<double>(n)));
   const std::size_t n_tr = n - n_val;
-  Eigen::MatrixXd xt(x.cols(), static_cast<Eigen::Index>(n_tr)), yt(y.cols(), static_cast<Eigen::Index>(n_tr));
-  Eigen::MatrixXd xv(x.cols(), static_cast<Eigen::Index>(n_val)), yv(y.cols(), static_cast<Eigen::Index>(n_val));
+  Eigen::MatrixXd xt(x.cols(), static_cast<Eigen::Index>(n_tr)),
+      yt(y.cols(), static_cast<Eigen::Index>(n_tr));
+  Eigen::MatrixXd xv(x.cols(), static_cast<Eigen::Index>(n_val)),
+      yv(y.cols(), static_cast<Eigen::Index>(n_val));
   for (std::size_t i = 0; i < n; ++i) {
     const auto src = static_cast<Eigen::Index>(order[i]);
     if (i < n_tr) {
@@ -249,8 +261,10 @@ TrainReport train(Network& net, const Eigen::MatrixXd& x, const Eigen::MatrixXd&
             step(i) = std::max(step(i) * 0.5, 1e-8);
             gi = 0.0;  // iRprop-: skip this update and forget the gradient
           }
-          if (gi > 0) w(i) -= step(i);
-          else if (gi < 0) w(i) += step(i);
+          if (gi > 0)
+            w(i) -= step(i);
+          else if (gi < 0)
+            w(i) += step(i);
           g_prev(i) = gi;
         }
       } else {

@@ -55,9 +55,9 @@ struct TrainSettings {
   Trainer trainer = Trainer::Rprop;
   std::size_t max_epochs = 1500;
   double validation_fraction = 0.15;
-  std::size_t patience = 150;        ///< epochs without validation improvement before stopping
-  double learning_rate = 0.05;       ///< gradient descent
-  double momentum = 0.9;             ///< gradient descent
+  std::size_t patience = 150;   ///< epochs without validation improvement before stopping
+  double learning_rate = 0.05;  ///< gradient descent
+  double momentum = 0.9;        ///< gradient descent
   std::uint64_t seed = 2;
 };
 
@@ -69,11 +69,12 @@ struct TrainReport {
   bool early_stopped = false;
 };
 
-using Progress = std::function<void(std::size_t epoch, std::size_t max_epochs, double train_mse, double val_mse)>;
+using Progress = std::function<void(std::size_t epoch, std::size_t max_epochs, double train_mse,
+                                    double val_mse)>;
 
 /// Trains on already scaled inputs/targets (rows = samples). The split into training and
 /// validation samples is a seeded shuffle.
-TrainReport train(Network& net, const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const TrainSettings& s,
-                  const Progress& progress = {});
+TrainReport train(Network& net, const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
+                  const TrainSettings& s, const Progress& progress = {});
 
 }  // namespace brakefit::mlp

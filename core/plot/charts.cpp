@@ -6,8 +6,8 @@
 
 namespace brakefit::plot {
 
-std::string fit_chart_svg(const std::string& title, const Curve& measured, const std::vector<MethodResult>& results,
-                          SlipUnit axis_unit) {
+std::string fit_chart_svg(const std::string& title, const Curve& measured,
+                          const std::vector<MethodResult>& results, SlipUnit axis_unit) {
   const double k = axis_unit == SlipUnit::Percent ? 100.0 : 1.0;
   XyChart c;
   c.title = title;
@@ -19,8 +19,12 @@ std::string fit_chart_svg(const std::string& title, const Curve& measured, const
   const double smax = measured.max_slip_ratio();
   for (std::size_t i = 0; i < results.size(); ++i) {
     const auto& r = results[i];
-    Series s{fmt::format("{} (MAPE {:.2f} %)", to_string(r.method), r.metrics.mape_pct), {}, {}, false,
-             series_color(i), r.method == Method::Som || r.method == Method::Mlp};
+    Series s{fmt::format("{} (MAPE {:.2f} %)", to_string(r.method), r.metrics.mape_pct),
+             {},
+             {},
+             false,
+             series_color(i),
+             r.method == Method::Som || r.method == Method::Mlp};
     for (int j = 0; j <= 200; ++j) {
       const double x = smax * j / 200.0;
       s.x.push_back(x * k);

@@ -10,7 +10,7 @@
 namespace brakefit::plot {
 
 /// Measured points and one line per method result; slip axis in the given unit.
-std::string fit_chart_svg(const std::string& title, const Curve& measured, const std::vector<MethodResult>& results,
-                          SlipUnit axis_unit);
+std::string fit_chart_svg(const std::string& title, const Curve& measured,
+                          const std::vector<MethodResult>& results, SlipUnit axis_unit);
 
 }  // namespace brakefit::plot

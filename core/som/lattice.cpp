@@ -23,7 +23,8 @@ double HexLattice::x(std::size_t unit) const {
 }
 
 double HexLattice::y(std::size_t unit) const {
-  return static_cast<double>(unit / cols_) * std::sqrt(0.75);
+  const std::size_t row = unit / cols_;
+  return static_cast<double>(row) * std::sqrt(0.75);
 }
 
 }  // namespace brakefit::som

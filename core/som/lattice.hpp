@@ -17,10 +17,14 @@ class HexLattice {
   std::size_t size() const { return rows_ * cols_; }
   double x(std::size_t unit) const;
   double y(std::size_t unit) const;
-  double distance(std::size_t a, std::size_t b) const { return dist_(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)); }
+  double distance(std::size_t a, std::size_t b) const {
+    return dist_(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+  }
   /// Units at lattice distance 1 (the 1-neighbourhood).
   const std::vector<std::size_t>& neighbours(std::size_t unit) const { return neighbours_[unit]; }
-  bool adjacent(std::size_t a, std::size_t b) const { return std::abs(distance(a, b) - 1.0) < 1e-9; }
+  bool adjacent(std::size_t a, std::size_t b) const {
+    return std::abs(distance(a, b) - 1.0) < 1e-9;
+  }
   const Eigen::MatrixXd& distances() const { return dist_; }
 
  private:

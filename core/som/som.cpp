@@ -11,18 +11,27 @@ namespace brakefit::som {
 
 const char* to_string(Neighbourhood n) {
   switch (n) {
-    case Neighbourhood::Gaussian: return "gaussian";
-    case Neighbourhood::CutGauss: return "cutgauss";
-    case Neighbourhood::Ep: return "ep";
-    case Neighbourhood::Bubble: return "bubble";
+    case Neighbourhood::Gaussian:
+      return "gaussian";
+    case Neighbourhood::CutGauss:
+      return "cutgauss";
+    case Neighbourhood::Ep:
+      return "ep";
+    case Neighbourhood::Bubble:
+      return "bubble";
   }
   return "?";
 }
-const char* to_string(Init i) { return i == Init::Random ? "random" : "linear"; }
-const char* to_string(Algorithm a) { return a == Algorithm::Batch ? "batch" : "sequential"; }
+const char* to_string(Init i) {
+  return i == Init::Random ? "random" : "linear";
+}
+const char* to_string(Algorithm a) {
+  return a == Algorithm::Batch ? "batch" : "sequential";
+}
 
 bool parse(const std::string& s, Neighbourhood& out) {
-  for (auto n : {Neighbourhood::Gaussian, Neighbourhood::CutGauss, Neighbourhood::Ep, Neighbourhood::Bubble})
+  for (auto n :
+       {Neighbourhood::Gaussian, Neighbourhood::CutGauss, Neighbourhood::Ep, Neighbourhood::Bubble})
     if (s == to_string(n)) return out = n, true;
   return false;
 }
@@ -40,10 +49,14 @@ bool parse(const std::string& s, Algorithm& out) {
 double neighbourhood_weight(Neighbourhood n, double d, double r) {
   r = std::max(r, 1e-9);
   switch (n) {
-    case Neighbourhood::Gaussian: return std::exp(-d * d / (2 * r * r));
-    case Neighbourhood::CutGauss: return d <= r ? std::exp(-d * d / (2 * r * r)) : 0.0;
-    case Neighbourhood::Ep: return d <= r ? 1.0 - d * d / (r * r) : 0.0;
-    case Neighbourhood::Bubble: return d <= r ? 1.0 : 0.0;
+    case Neighbourhood::Gaussian:
+      return std::exp(-d * d / (2 * r * r));
+    case Neighbourhood::CutGauss:
+      return d <= r ? std::exp(-d * d / (2 * r * r)) : 0.0;
+    case Neighbourhood::Ep:
+      return d <= r ? 1.0 - d * d / (r * r) : 0.0;
+    case Neighbourhood::Bubble:
+      return d <= r ? 1.0 : 0.0;
   }
   return 0.0;
 }
@@ -78,20 +91,26 @@ Som Som::initialise(const SomSettings& s, const Eigen::MatrixXd& data) {
       for (Eigen::Index k = 0; k < dim; ++k) cb(i, k) = rng.uniform(lo(k), hi(k));
   } else {
     // Linear: mean + the two principal directions (scaled by sqrt of their eigenvalues) spanned
-    // over unit coordinates normalised to [-1, 1]; the larger eigenvalue goes along the longer side.
+    // over unit coordinates normalised to [-1, 1]; the larger eigenvalue goes along the longer
+    // side.
     const Eigen::RowVectorXd mean = data.colwise().mean();
     const Eigen::MatrixXd centred = data.rowwise() - mean;
-    const Eigen::MatrixXd cov = centred.transpose() * centred / std::max<double>(1.0, static_cast<double>(data.rows() - 1));
+    const Eigen::MatrixXd cov =
+        centred.transpose() * centred / std::max<double>(1.0, static_cast<double>(data.rows() - 1));
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(cov);
     const Eigen::Index last = dim - 1;
-    Eigen::VectorXd v1 = es.eigenvectors().col(last) * std::sqrt(std::max(0.0, es.eigenvalues()(last)));
-    Eigen::VectorXd v2 = dim > 1 ? Eigen::VectorXd(es.eigenvectors().col(last - 1) *
-                                                   std::sqrt(std::max(0.0, es.eigenvalues()(last - 1))))
-                                 : Eigen::VectorXd::Zero(dim);
+    Eigen::VectorXd v1 =
+        es.eigenvectors().col(last) * std::sqrt(std::max(0.0, es.eigenvalues()(last)));
+    Eigen::VectorXd v2 = dim > 1
+                             ? Eigen::VectorXd(es.eigenvectors().col(last - 1) *
+                                               std::sqrt(std::max(0.0, es.eigenvalues()(last - 1))))
+                             : Eigen::VectorXd::Zero(dim);
     double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
     for (std::size_t i = 0; i < lat.size(); ++i) {
-      xmin = std::min(xmin, lat.x(i)); xmax = std::max(xmax, lat.x(i));
-      ymin = std::min(ymin, lat.y(i)); ymax = std::max(ymax, lat.y(i));
+      xmin = std::min(xmin, lat.x(i));
+      xmax = std::max(xmax, lat.x(i));
+      ymin = std::min(ymin, lat.y(i));
+      ymax = std::max(ymax, lat.y(i));
     }
     const bool cols_longer = (xmax - xmin) >= (ymax - ymin);
     for (std::size_t i = 0; i < lat.size(); ++i) {
@@ -104,7 +123,8 @@ Som Som::initialise(const SomSettings& s, const Eigen::MatrixXd& data) {
   return Som(std::move(lat), std::move(cb));
 }
 
-Eigen::MatrixXd Som::distances_sq(const Eigen::MatrixXd& data, const Eigen::VectorXd& data_sq) const {
+Eigen::MatrixXd Som::distances_sq(const Eigen::MatrixXd& data,
+                                  const Eigen::VectorXd& data_sq) const {
   const Eigen::VectorXd cb_sq = codebook_.rowwise().squaredNorm();
   Eigen::MatrixXd d = -2.0 * data * codebook_.transpose();
   d.colwise() += data_sq;
@@ -124,7 +144,8 @@ std::vector<std::size_t> Som::bmus(const Eigen::MatrixXd& data) const {
   return out;
 }
 
-void Som::batch_epoch(const Eigen::MatrixXd& data, const Eigen::VectorXd& data_sq, Neighbourhood n, double r) {
+void Som::batch_epoch(const Eigen::MatrixXd& data, const Eigen::VectorXd& data_sq, Neighbourhood n,
+                      double r) {
   const Eigen::MatrixXd d = distances_sq(data, data_sq);
   const auto u = codebook_.rows();
   Eigen::MatrixXd sums = Eigen::MatrixXd::Zero(u, codebook_.cols());
@@ -137,14 +158,16 @@ void Som::batch_epoch(const Eigen::MatrixXd& data, const Eigen::VectorXd& data_s
   }
   Eigen::MatrixXd h(u, u);
   for (Eigen::Index a = 0; a < u; ++a)
-    for (Eigen::Index b = 0; b < u; ++b) h(a, b) = neighbourhood_weight(n, lattice_.distances()(a, b), r);
+    for (Eigen::Index b = 0; b < u; ++b)
+      h(a, b) = neighbourhood_weight(n, lattice_.distances()(a, b), r);
   const Eigen::MatrixXd num = h * sums;
   const Eigen::VectorXd den = h * counts;
   for (Eigen::Index i = 0; i < u; ++i)
     if (den(i) > 0.0) codebook_.row(i) = num.row(i) / den(i);
 }
 
-void Som::train(const SomSettings& settings, const Eigen::MatrixXd& data, const Progress& progress) {
+void Som::train(const SomSettings& settings, const Eigen::MatrixXd& data,
+                const Progress& progress) {
   const SomSettings s = with_default_radii(settings);
   const Eigen::VectorXd data_sq = data.rowwise().squaredNorm();
   Rng rng(s.seed ^ 0x9E3779B97F4A7C15ULL);
@@ -152,7 +175,8 @@ void Som::train(const SomSettings& settings, const Eigen::MatrixXd& data, const 
   for (const auto& [name, ph] : phases) {
     if (s.algorithm == Algorithm::Batch) {
       for (std::size_t t = 1; t <= ph->epochs; ++t) {
-        batch_epoch(data, data_sq, s.neighbourhood, radius_at(ph->radius_ini, ph->radius_fin, t, ph->epochs));
+        batch_epoch(data, data_sq, s.neighbourhood,
+                    radius_at(ph->radius_ini, ph->radius_fin, t, ph->epochs));
         if (progress) progress(name, t, ph->epochs);
       }
     } else {
@@ -167,10 +191,12 @@ void Som::train(const SomSettings& settings, const Eigen::MatrixXd& data, const 
           ++step;
           const auto j = static_cast<Eigen::Index>(rng.index(n));
           const double r = radius_at(ph->radius_ini, ph->radius_fin, step, total);
-          const double alpha = total > 1 ? a / (b + static_cast<double>(step) - 1.0) : ph->alpha_ini;
+          const double alpha =
+              total > 1 ? a / (b + static_cast<double>(step) - 1.0) : ph->alpha_ini;
           const std::size_t c = bmu(data.row(j));
           for (Eigen::Index i = 0; i < codebook_.rows(); ++i) {
-            const double h = neighbourhood_weight(s.neighbourhood, lattice_.distance(static_cast<std::size_t>(i), c), r);
+            const double h = neighbourhood_weight(
+                s.neighbourhood, lattice_.distance(static_cast<std::size_t>(i), c), r);
             if (h > 0.0) codebook_.row(i) += alpha * h * (data.row(j) - codebook_.row(i));
           }
         }
@@ -186,7 +212,8 @@ std::size_t Som::bmu(const Eigen::Ref<const Eigen::RowVectorXd>& x) const {
   return static_cast<std::size_t>(best);
 }
 
-std::pair<std::size_t, std::size_t> Som::two_bmus(const Eigen::Ref<const Eigen::RowVectorXd>& x) const {
+std::pair<std::size_t, std::size_t> Som::two_bmus(
+    const Eigen::Ref<const Eigen::RowVectorXd>& x) const {
   const Eigen::VectorXd d = (codebook_.rowwise() - x).rowwise().squaredNorm();
   std::size_t b1 = 0, b2 = 1;
   if (d(1) < d(0)) std::swap(b1, b2);
@@ -202,30 +229,31 @@ std::pair<std::size_t, std::size_t> Som::two_bmus(const Eigen::Ref<const Eigen::
   return {b1, b2};
 }
 
-Som::Match Som::bmu_masked(const std::vector<double>& x, const std::vector<bool>& mask, bool scale_invariant,
-                           const std::vector<bool>* allowed) const {
+Som::Match Som::bmu_masked(const std::vector<double>& x, const std::vector<bool>& mask,
+                           bool scale_invariant, const std::vector<bool>* allowed) const {
+  // With w the 0/1 mask and xw = x*w: sum_k w (x - s m)^2 = xx - 2 s (M xw) + s^2 ((M.^2) w), two
+  // matrix-vector products over the whole codebook.
+  const auto dim = codebook_.cols();
+  Eigen::VectorXd w(dim), xw(dim);
+  for (Eigen::Index k = 0; k < dim; ++k) {
+    const bool on = mask[static_cast<std::size_t>(k)];
+    w(k) = on ? 1.0 : 0.0;
+    xw(k) = on ? x[static_cast<std::size_t>(k)] : 0.0;
+  }
+  const double xx = xw.squaredNorm();
+  const Eigen::VectorXd xm = codebook_ * xw;
+  const Eigen::VectorXd mm = codebook_.cwiseAbs2() * w;
   Match best;
   best.distance_sq = std::numeric_limits<double>::infinity();
   for (Eigen::Index i = 0; i < codebook_.rows(); ++i) {
     if (allowed && !(*allowed)[static_cast<std::size_t>(i)]) continue;
-    double d = 0.0, scale = 1.0;
+    double scale = 1.0;
+    double d;
     if (scale_invariant) {
-      double xx = 0, xm = 0, mm = 0;
-      for (std::size_t k = 0; k < x.size(); ++k) {
-        if (!mask[k]) continue;
-        const double m = codebook_(i, static_cast<Eigen::Index>(k));
-        xx += x[k] * x[k];
-        xm += x[k] * m;
-        mm += m * m;
-      }
-      scale = mm > 0 ? xm / mm : 0.0;
-      d = xx - (mm > 0 ? xm * xm / mm : 0.0);
+      scale = mm(i) > 0 ? xm(i) / mm(i) : 0.0;
+      d = xx - (mm(i) > 0 ? xm(i) * xm(i) / mm(i) : 0.0);
     } else {
-      for (std::size_t k = 0; k < x.size(); ++k) {
-        if (!mask[k]) continue;
-        const double r = x[k] - codebook_(i, static_cast<Eigen::Index>(k));
-        d += r * r;
-      }
+      d = xx - 2.0 * xm(i) + mm(i);
     }
     if (d < best.distance_sq) best = {static_cast<std::size_t>(i), d, scale};
   }
@@ -253,7 +281,8 @@ Eigen::VectorXd Som::umatrix() const {
   for (Eigen::Index i = 0; i < codebook_.rows(); ++i) {
     const auto& nb = lattice_.neighbours(static_cast<std::size_t>(i));
     double s = 0.0;
-    for (std::size_t j : nb) s += (codebook_.row(i) - codebook_.row(static_cast<Eigen::Index>(j))).norm();
+    for (std::size_t j : nb)
+      s += (codebook_.row(i) - codebook_.row(static_cast<Eigen::Index>(j))).norm();
     u(i) = nb.empty() ? 0.0 : s / static_cast<double>(nb.size());
   }
   return u;

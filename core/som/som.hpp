@@ -33,7 +33,7 @@ struct Phase {
   std::size_t epochs = 0;
   double radius_ini = 0.0;  ///< <= 0: Toolbox default for the phase
   double radius_fin = 0.0;
-  double alpha_ini = 0.0;   ///< sequential only
+  double alpha_ini = 0.0;  ///< sequential only
 };
 
 struct SomSettings {
@@ -64,7 +64,8 @@ class Som {
   void train(const SomSettings& s, const Eigen::MatrixXd& data, const Progress& progress = {});
   /// One batch epoch with radius r: m_i = sum_j h(i,c(j)) x_j / sum_j h(i,c(j)); units with zero
   /// total weight are left unchanged.
-  void batch_epoch(const Eigen::MatrixXd& data, const Eigen::VectorXd& data_sq, Neighbourhood n, double r);
+  void batch_epoch(const Eigen::MatrixXd& data, const Eigen::VectorXd& data_sq, Neighbourhood n,
+                   double r);
 
   const HexLattice& lattice() const { return lattice_; }
   const Eigen::MatrixXd& codebook() const { return codebook_; }
@@ -85,12 +86,13 @@ class Som {
   };
   /// BMU over the masked components only; with scale_invariant the distance is
   /// min_s ||x - s*m||^2 (shape matching). Only units with allowed[u] (if given) are considered.
-  Match bmu_masked(const std::vector<double>& x, const std::vector<bool>& mask, bool scale_invariant,
-                   const std::vector<bool>* allowed = nullptr) const;
+  Match bmu_masked(const std::vector<double>& x, const std::vector<bool>& mask,
+                   bool scale_invariant, const std::vector<bool>* allowed = nullptr) const;
 
   double quantization_error(const Eigen::MatrixXd& data) const;  ///< qe: mean distance to BMU
-  double topographic_error(const Eigen::MatrixXd& data) const;   ///< te: share of non-adjacent 1st/2nd BMUs
-  Eigen::VectorXd umatrix() const;  ///< per unit: mean distance to its neighbours' weights
+  double topographic_error(
+      const Eigen::MatrixXd& data) const;  ///< te: share of non-adjacent 1st/2nd BMUs
+  Eigen::VectorXd umatrix() const;         ///< per unit: mean distance to its neighbours' weights
 
  private:
   Eigen::MatrixXd distances_sq(const Eigen::MatrixXd& data, const Eigen::VectorXd& data_sq) const;

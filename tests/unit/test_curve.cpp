@@ -13,7 +13,8 @@ namespace {
 
 std::string rows(int n, double slip_scale = 0.01) {
   std::string s;
-  for (int i = 1; i <= n; ++i) s += std::to_string(i * slip_scale) + "," + std::to_string(100.0 * i) + "\n";
+  for (int i = 1; i <= n; ++i)
+    s += std::to_string(i * slip_scale) + "," + std::to_string(100.0 * i) + "\n";
   return s;
 }
 
@@ -34,7 +35,8 @@ TEST(CurveCsv, ParsesRatioAndPercentHeaders) {
   ASSERT_EQ(a.curve.size(), 10u);
   EXPECT_DOUBLE_EQ(a.curve.slip_ratio[2], 0.03);
   EXPECT_DOUBLE_EQ(a.curve.force_n[2], 300.0);
-  const ParsedCurve b = parse_curve_csv("force_n,slip_pct,extra\r\n" + std::string("100,1,x\r\n200,2,y\r\n300,3,z\n") +
+  const ParsedCurve b = parse_curve_csv("force_n,slip_pct,extra\r\n" +
+                                            std::string("100,1,x\r\n200,2,y\r\n300,3,z\n") +
                                             "400,4,a\n500,5,b\n600,6,c\n700,7,d\n800,8.5,e\n\n",
                                         "b.csv");
   EXPECT_EQ(b.input_unit, SlipUnit::Percent);
@@ -45,13 +47,25 @@ TEST(CurveCsv, ParsesRatioAndPercentHeaders) {
 
 TEST(CurveCsv, ErrorsNameFileAndLine) {
   EXPECT_EQ(error_of("slip,force\n" + rows(10)).rfind("c.csv:1: header", 0), 0u);
-  EXPECT_EQ(error_of("slip,force_n\n0.1,100\n0.2,abc\n" + rows(10)).rfind("c.csv:3: column 'force_n': 'abc' is not a number", 0), 0u);
-  EXPECT_EQ(error_of("slip,force_n\n0.1,100\nnan,200\n" + rows(10)).rfind("c.csv:3: column 'slip': value 'nan' is not finite", 0), 0u);
-  EXPECT_EQ(error_of("slip,force_n\n" + rows(5) + "1.2,5\n" + rows(5)).rfind("c.csv:7: column 'slip': slip 1.2 is outside", 0), 0u);
-  EXPECT_EQ(error_of("slip_pct,force_n\n1,1\n150,2\n" + rows(10)).rfind("c.csv:3: column 'slip_pct'", 0), 0u);
-  EXPECT_EQ(error_of("slip,force_n\n0.1,1,7\n" + rows(10)).rfind("c.csv:2: expected 2 columns", 0), 0u);
-  EXPECT_EQ(error_of("slip,force_n\n" + rows(7)).rfind("c.csv:9: only 7 data points; at least 8", 0), 0u);
-  EXPECT_EQ(error_of("slip,force_n\n0.1,\n" + rows(10)).rfind("c.csv:2: column 'force_n': '' is not a number", 0), 0u);
+  EXPECT_EQ(error_of("slip,force_n\n0.1,100\n0.2,abc\n" + rows(10))
+                .rfind("c.csv:3: column 'force_n': 'abc' is not a number", 0),
+            0u);
+  EXPECT_EQ(error_of("slip,force_n\n0.1,100\nnan,200\n" + rows(10))
+                .rfind("c.csv:3: column 'slip': value 'nan' is not finite", 0),
+            0u);
+  EXPECT_EQ(error_of("slip,force_n\n" + rows(5) + "1.2,5\n" + rows(5))
+                .rfind("c.csv:7: column 'slip': slip 1.2 is outside", 0),
+            0u);
+  EXPECT_EQ(
+      error_of("slip_pct,force_n\n1,1\n150,2\n" + rows(10)).rfind("c.csv:3: column 'slip_pct'", 0),
+      0u);
+  EXPECT_EQ(error_of("slip,force_n\n0.1,1,7\n" + rows(10)).rfind("c.csv:2: expected 2 columns", 0),
+            0u);
+  EXPECT_EQ(
+      error_of("slip,force_n\n" + rows(7)).rfind("c.csv:9: only 7 data points; at least 8", 0), 0u);
+  EXPECT_EQ(error_of("slip,force_n\n0.1,\n" + rows(10))
+                .rfind("c.csv:2: column 'force_n': '' is not a number", 0),
+            0u);
   EXPECT_EQ(error_of("").rfind("c.csv:1: no header", 0), 0u);
 }
 
@@ -66,7 +80,8 @@ TEST(Grid, ResampleMasksBeyondTheDataAndSmoothsNoise) {
   for (std::size_t k = 0; k < grid.size(); ++k) {
     EXPECT_EQ(g.mask[k], grid[k] <= 0.27 + 1e-9) << grid[k];
     if (g.mask[k]) {
-      EXPECT_NEAR(g.values[k], mf_force_n(p, grid[k]), 0.01 * 4000);  // local regression of a smooth curve
+      EXPECT_NEAR(g.values[k], mf_force_n(p, grid[k]),
+                  0.01 * 4000);  // local regression of a smooth curve
     }
   }
   EXPECT_EQ(g.valid_count(), 27u);

@@ -49,8 +49,11 @@ TEST(Lm, RespectsBoundsAndMarksParameterAtBound) {
 }
 
 TEST(MfFit, RecoversNoiseFreeParametersTo1e6) {
-  const MfParams cases[] = {{15, 1.6, 4500, 0.3, 0, 0}, {9.7, 1.55, 2100, -0.04, 0, 0}, {21, 1.65, 7000, 0.58, 0, 0},
-                            {6, 1.4, 24000, -4, 0, 0}, {4.2, 1.36, 13000, -1.2, 0, 0}};
+  const MfParams cases[] = {{15, 1.6, 4500, 0.3, 0, 0},
+                            {9.7, 1.55, 2100, -0.04, 0, 0},
+                            {21, 1.65, 7000, 0.58, 0, 0},
+                            {6, 1.4, 24000, -4, 0, 0},
+                            {4.2, 1.36, 13000, -1.2, 0, 0}};
   for (const auto& t : cases) {
     const Curve c = sample_curve(t, even_slips(200, 1.0));
     const MfParams start{t.B * 1.2, t.C * 0.95, t.D * 1.1, t.E + 0.1, 0, 0};
@@ -93,7 +96,8 @@ TEST(MfFit, StandardErrorsMatchScatterOverNoiseRealisations) {
   for (double b : bs) mean += b / n;
   for (double b : bs) var += (b - mean) * (b - mean) / (n - 1);
   const double empirical = std::sqrt(var);
-  EXPECT_NEAR(reported / empirical, 1.0, 0.2) << "reported " << reported << " empirical " << empirical;
+  EXPECT_NEAR(reported / empirical, 1.0, 0.2)
+      << "reported " << reported << " empirical " << empirical;
   EXPECT_NEAR(mean, t.B, 3 * empirical / std::sqrt(n) + 1e-3);
 }
 

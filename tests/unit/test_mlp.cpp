@@ -60,8 +60,10 @@ TEST(Mlp, EachTrainerLearnsAKnownMapping) {
     const TrainReport rep = train(net, sx.apply(x), sy.apply(y), s);
     const Eigen::MatrixXd pred = sy.invert(net.predict(sx.apply(xtest)));
     const double mse = (pred - ytest).squaredNorm() / static_cast<double>(ytest.size());
-    const double var = (ytest.rowwise() - ytest.colwise().mean()).squaredNorm() / static_cast<double>(ytest.size());
-    EXPECT_LT(mse / var, t == Trainer::GradientDescent ? 0.05 : 0.01) << to_string(t) << " after " << rep.epochs;
+    const double var = (ytest.rowwise() - ytest.colwise().mean()).squaredNorm() /
+                       static_cast<double>(ytest.size());
+    EXPECT_LT(mse / var, t == Trainer::GradientDescent ? 0.05 : 0.01)
+        << to_string(t) << " after " << rep.epochs;
     EXPECT_GT(rep.best_epoch, 0u);
   }
 }

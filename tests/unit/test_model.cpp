@@ -74,9 +74,11 @@ TEST(TrainConfig, ErrorsNameTheKey) {
     return std::string();
   };
   EXPECT_EQ(err("[som]\nrowz = 3\n").rfind("t.toml: key 'som.rowz': unknown key", 0), 0u);
-  EXPECT_EQ(err("[som]\nrows = \"ten\"\n").rfind("t.toml: key 'som.rows': expected an integer", 0), 0u);
+  EXPECT_EQ(err("[som]\nrows = \"ten\"\n").rfind("t.toml: key 'som.rows': expected an integer", 0),
+            0u);
   EXPECT_EQ(err("[som]\nrows = 1\n").rfind("t.toml: key 'som.rows': value 1 is outside", 0), 0u);
-  EXPECT_EQ(err("[som]\nneighbourhood = \"mexican\"\n").rfind("t.toml: key 'som.neighbourhood'", 0), 0u);
+  EXPECT_EQ(err("[som]\nneighbourhood = \"mexican\"\n").rfind("t.toml: key 'som.neighbourhood'", 0),
+            0u);
   EXPECT_EQ(err("[mlp]\ntrainer = \"adam\"\n").rfind("t.toml: key 'mlp.trainer'", 0), 0u);
   EXPECT_EQ(err("[database]\npreset = \"bus\"\n").rfind("t.toml: key 'database.preset'", 0), 0u);
   EXPECT_EQ(err("[[database.family]]\nB = [1, 2]\nC = [1, 2]\nD_n = [1]\nE = [0, 1]\n")
@@ -93,8 +95,8 @@ TEST(Database, DeterministicFromSeedAndInsideTheRanges) {
   std::size_t trucks = 0;
   for (std::size_t i = 0; i < a.labels.size(); ++i) {
     const TyreFamily& f = s.families[a.family[i]];
-    EXPECT_TRUE(f.B.contains(a.labels[i].B) && f.C.contains(a.labels[i].C) && f.D_n.contains(a.labels[i].D) &&
-                f.E.contains(a.labels[i].E));
+    EXPECT_TRUE(f.B.contains(a.labels[i].B) && f.C.contains(a.labels[i].C) &&
+                f.D_n.contains(a.labels[i].D) && f.E.contains(a.labels[i].E));
     trucks += a.family[i] == 1;
   }
   EXPECT_NEAR(static_cast<double>(trucks) / static_cast<double>(a.labels.size()), 0.2, 0.04);
@@ -129,13 +131,16 @@ TEST(Model, CorruptTruncatedAndMismatchedFilesGiveClearErrors) {
   const auto pos = corrupt.find("\"codebook\"");
   const auto digit = corrupt.find_first_of("123456789", pos + 20);
   corrupt[digit] = corrupt[digit] == '9' ? '8' : static_cast<char>(corrupt[digit] + 1);
-  EXPECT_NE(load_error(corrupt).find("m.json: model is corrupt: checksum mismatch"), std::string::npos);
-  EXPECT_NE(load_error(text.substr(0, text.size() / 2)).find("m.json: not a brakefit model (corrupt or truncated JSON"),
+  EXPECT_NE(load_error(corrupt).find("m.json: model is corrupt: checksum mismatch"),
+            std::string::npos);
+  EXPECT_NE(load_error(text.substr(0, text.size() / 2))
+                .find("m.json: not a brakefit model (corrupt or truncated JSON"),
             std::string::npos);
   std::string v2 = text;
   v2.replace(v2.find("\"format_version\": 1"), 19, "\"format_version\": 2");
   EXPECT_NE(load_error(v2).find("model format version 2 is not supported"), std::string::npos);
-  EXPECT_NE(load_error("{\"schema\": \"other\"}").find("schema is not 'brakefit.model/1'"), std::string::npos);
+  EXPECT_NE(load_error("{\"schema\": \"other\"}").find("schema is not 'brakefit.model/1'"),
+            std::string::npos);
 }
 
 TEST(Identify, HybridRecoversAnInRangeCurveAndSomFallsBackFromEmptyUnits) {
@@ -156,6 +161,16 @@ TEST(Identify, HybridRecoversAnInRangeCurveAndSomFallsBackFromEmptyUnits) {
   EXPECT_TRUE(after.fallback);
   EXPECT_NE(after.bmu, before.bmu);
   EXPECT_GT(m.unit_hits[after.bmu], 0u);
+}
+
+TEST(Identify, LeastSquaresBoundsCoverTheModelsDatabaseRanges) {
+  EXPECT_DOUBLE_EQ(fit_options_for(nullptr).bounds.E_hi, 1.0);
+  Model m = tiny_model();
+  EXPECT_DOUBLE_EQ(fit_options_for(&m).bounds.E_hi, 1.0);  // default families stay inside E <= 1
+  EXPECT_DOUBLE_EQ(fit_options_for(&m).bounds.E_lo, -20.0);
+  m.config.database = database_preset("paper");
+  EXPECT_DOUBLE_EQ(fit_options_for(&m).bounds.E_hi, 50.0);
+  EXPECT_DOUBLE_EQ(fit_options_for(&m).bounds.B_hi, 200.0);
 }
 
 TEST(Identify, ShapeScaleIsTheLinearLeastSquaresD) {

@@ -132,7 +132,9 @@ TEST(Som, TwoDimensionalMapPreservesTopology) {
     int pairs = 0;
     for (std::size_t a = 0; a < som.units(); ++a)
       for (std::size_t b = a + 1; b < som.units(); ++b, ++pairs)
-        mean_pair += (som.codebook().row(static_cast<Eigen::Index>(a)) - som.codebook().row(static_cast<Eigen::Index>(b))).norm();
+        mean_pair += (som.codebook().row(static_cast<Eigen::Index>(a)) -
+                      som.codebook().row(static_cast<Eigen::Index>(b)))
+                         .norm();
     mean_pair /= pairs;
     EXPECT_LT(u.mean(), 0.5 * mean_pair) << to_string(init);
   }
