@@ -124,7 +124,7 @@ int run(int argc, char** argv) {
   std::size_t n = 300, points = 200, random_starts = 20;
   double noise = 0.01;
   std::uint64_t seed = 777;
-  bool compare_input = false;
+  bool compare_input = false, compare_trainers = false;
   app.add_option("--model", model_path, "model (default: the shipped model)");
   app.add_option("--curves", n, "test curves per set")->capture_default_str();
   app.add_option("--points", points, "points per curve")->capture_default_str();
@@ -135,6 +135,8 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--compare-input", compare_input,
                "also train a raw-curve SOM and compare it with the shape SOM");
+  app.add_flag("--compare-trainers", compare_trainers,
+               "also train the MLP with gradient descent and Levenberg-Marquardt (paper Table 1)");
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -245,6 +247,45 @@ int run(int argc, char** argv) {
       row(other, st_other[Method::Som], st_other_r[Method::Som]);
       std::cout
           << "\n(qe is in the SOM's own input units: shapes are dimensionless, raw curves in N.)\n";
+    }
+    if (compare_trainers) {
+      // Paper Table 1: the same task with each MLP trainer. LM needs a small network (its
+      // Gauss-Newton matrix is parameters^2), so it gets one hidden layer of 16.
+      std::cout << "\n### MLP trainers (paper Table 1), noise-free 0-100 % and 0-27 %\n\n"
+                   "| trainer | hidden | epochs (best) | validation mse (scaled) | train s | MAPE "
+                   "median % (0-100 %) | "
+                   "MAPE p90 % | MAPE median % (0-27 %) |\n|---|---|---|---|---|---|---|---|\n";
+      for (mlp::Trainer tr :
+           {mlp::Trainer::Rprop, mlp::Trainer::GradientDescent, mlp::Trainer::LevenbergMarquardt}) {
+        TrainConfig tc = model.config;
+        tc.som.rough.epochs = 0;  // only the MLP is compared
+        tc.som.fine.epochs = 0;
+        tc.mlp.trainer = tr;
+        if (tr == mlp::Trainer::LevenbergMarquardt) {
+          tc.mlp.hidden = {16};
+          tc.mlp.max_epochs = 150;
+          tc.mlp.patience = 15;
+        }
+        if (tr == mlp::Trainer::GradientDescent) tc.mlp.learning_rate = 0.02;
+        spdlog::info("training the MLP with {}", mlp::to_string(tr));
+        const auto t0 = std::chrono::steady_clock::now();
+        const Model m =
+            train_model(tc, [](const std::string& st, std::size_t d, std::size_t tot, double l) {
+              if (st == "mlp") cli::log_progress(st, d, tot, l);
+            });
+        const double secs =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        auto a = evaluate(m, full, {Method::Mlp}, "trainer full");
+        auto b = evaluate(m, roller, {Method::Mlp}, "trainer roller");
+        std::string hidden;
+        for (std::size_t h : tc.mlp.hidden)
+          hidden += (hidden.empty() ? "" : "-") + std::to_string(h);
+        std::cout << fmt::format(
+            "| {} | {} | {} ({}) | {:.4f} | {:.1f} | {:.3f} | {:.3f} | {:.3f} |\n",
+            mlp::to_string(tr), hidden, m.mlp_report.epochs, m.mlp_report.best_epoch,
+            m.mlp_report.validation_mse, secs, quantile(a[Method::Mlp].mape, 0.5),
+            quantile(a[Method::Mlp].mape, 0.9), quantile(b[Method::Mlp].mape, 0.5));
+      }
     }
   } catch (const std::exception& e) {
     std::cerr << "accuracy: error: " << e.what() << "\n";

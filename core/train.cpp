@@ -53,23 +53,26 @@ void train_som_part(Model& m, const CurveDatabase& db, const TrainProgress& prog
   label_units(m, db, x);
 }
 
+/// Generates the database and trains the SOM; the database is returned for the MLP.
+CurveDatabase train_som_stage(Model& m, const TrainConfig& c, const TrainProgress& progress) {
+  m.config = c;
+  m.grid = default_slip_grid();
+  CurveDatabase db = generate_database(c.database, m.grid);
+  train_som_part(m, db, progress);
+  return db;
+}
+
 }  // namespace
 
 Model train_som_only(const TrainConfig& c, const TrainProgress& progress) {
   Model m;
-  m.config = c;
-  m.grid = default_slip_grid();
-  const CurveDatabase db = generate_database(c.database, m.grid);
-  train_som_part(m, db, progress);
+  train_som_stage(m, c, progress);
   return m;
 }
 
 Model train_model(const TrainConfig& c, const TrainProgress& progress) {
   Model m;
-  m.config = c;
-  m.grid = default_slip_grid();
-  const CurveDatabase db = generate_database(c.database, m.grid);
-  train_som_part(m, db, progress);
+  const CurveDatabase db = train_som_stage(m, c, progress);
 
   // MLP: features of each database curve, a share of them cut short at a random slip (as a roller
   // test that switches off early), targets log B, C, E.

@@ -7,6 +7,15 @@
 
 using namespace brakefit;
 
+namespace {
+
+MfParams random_params(Rng& rng) {
+  return {rng.uniform(2, 40), rng.uniform(0.8, 2.2),    rng.uniform(500, 9000),
+          rng.uniform(-5, 1), rng.uniform(-0.01, 0.01), rng.uniform(-50, 50)};
+}
+
+}  // namespace
+
 TEST(MagicFormula, HandComputedValues) {
   // B=10, C=1.5, D=1000, E=0 at slip 0.1: Bx = 1, atan(1) = pi/4, F = 1000 sin(1.5 pi/4).
   EXPECT_NEAR(mf_force_n({10, 1.5, 1000, 0, 0, 0}, 0.1), 923.8795325, 1e-6);
@@ -20,8 +29,7 @@ TEST(MagicFormula, MatchesPaperFormOfEquation2) {
   // Paper Eq. 2: D sin[C arctan{B(1-E)x + E arctan(Bx)}] with shifts x -> x + SHx, F -> F + SVx.
   Rng rng(5);
   for (int i = 0; i < 100; ++i) {
-    const MfParams p{rng.uniform(2, 40), rng.uniform(0.8, 2.2),    rng.uniform(500, 9000),
-                     rng.uniform(-5, 1), rng.uniform(-0.01, 0.01), rng.uniform(-50, 50)};
+    const MfParams p = random_params(rng);
     const double s = rng.uniform(0, 1);
     const double x = s + p.SHx;
     const double paper =
@@ -33,8 +41,7 @@ TEST(MagicFormula, MatchesPaperFormOfEquation2) {
 TEST(MagicFormula, AnalyticJacobianMatchesFiniteDifferences) {
   Rng rng(6);
   for (int i = 0; i < 200; ++i) {
-    const MfParams p{rng.uniform(2, 40), rng.uniform(0.8, 2.2),    rng.uniform(500, 9000),
-                     rng.uniform(-5, 1), rng.uniform(-0.01, 0.01), rng.uniform(-50, 50)};
+    const MfParams p = random_params(rng);
     const double s = rng.uniform(0.001, 1);
     MfGradient g;
     const double f = mf_force_and_gradient(p, s, g);
