@@ -8,43 +8,13 @@
 #include "brakefit/version.hpp"
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
+#include "cli/json_out.hpp"
 #include "core/curve_csv.hpp"
 #include "core/plot/charts.hpp"
 
 namespace brakefit::cli {
 
 namespace {
-
-nlohmann::ordered_json num(double v) {
-  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
-}
-
-nlohmann::ordered_json result_json(const MethodResult& r) {
-  nlohmann::ordered_json j;
-  j["method"] = to_string(r.method);
-  j["B"] = num(r.params.B);
-  j["C"] = num(r.params.C);
-  j["D"] = num(r.params.D);
-  j["E"] = num(r.params.E);
-  j["mape_pct"] = num(r.metrics.mape_pct);
-  j["mape_points_excluded"] = r.metrics.mape_points_excluded;
-  j["rmse_n"] = num(r.metrics.rmse_n);
-  j["rmse_pct_peak"] = num(r.metrics.rmse_pct_peak);
-  const MfPeak pk = mf_peak(r.params, 1.0);
-  j["peak_force_n"] = num(pk.force_n);
-  j["peak_slip_ratio"] = num(pk.slip_ratio);
-  j["peak_reached"] = r.peak_reached;
-  if (r.stderr_) {
-    const auto& s = *r.stderr_;
-    j["stderr"] = {{"B", num(s[0])}, {"C", num(s[1])}, {"D", num(s[2])}, {"E", num(s[3])}};
-    j["converged"] = r.converged;
-    j["iterations"] = r.iterations;
-  } else {
-    j["stderr"] = nullptr;
-  }
-  if (r.bmu) j["bmu"] = *r.bmu;
-  return j;
-}
 
 std::string plot_path_for(const std::string& plot, const std::string& file, std::size_t n_files) {
   if (n_files == 1) return plot;

@@ -1,5 +1,6 @@
 #pragma once
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace brakefit::cli {
 
@@ -7,5 +8,10 @@ void add_train_command(CLI::App& app);
 void add_fit_command(CLI::App& app);
 void add_map_command(CLI::App& app);
 void add_synth_command(CLI::App& app);
+void add_simulate_command(CLI::App& app);
+void add_replay_command(CLI::App& app);
+void add_export_command(CLI::App& app);
+/// "dir/name.log" -> "dir/name".
+std::string recording_stem(const std::string& log_path);
 
 }  // namespace brakefit::cli

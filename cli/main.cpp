@@ -28,6 +28,9 @@ int run(int argc, char** argv) {
   brakefit::cli::add_fit_command(app);
   brakefit::cli::add_map_command(app);
   brakefit::cli::add_synth_command(app);
+  brakefit::cli::add_simulate_command(app);
+  brakefit::cli::add_replay_command(app);
+  brakefit::cli::add_export_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,133 @@
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "cli/commands.hpp"
+#include "cli/io.hpp"
+#include "cli/json_out.hpp"
+#include "cli/recording.hpp"
+#include "core/pipeline/event_csv.hpp"
+#include "core/plot/charts.hpp"
+
+namespace brakefit::cli {
+
+namespace {
+
+void add_run_options(CLI::App* cmd, RunOptions& ro, std::string& force) {
+  cmd->add_option("--bench", ro.bench_file,
+                  "bench calibration TOML (default: <stem>.bench.toml beside the log)");
+  cmd->add_flag("--lenient", ro.lenient, "count and skip malformed log lines instead of failing");
+  cmd->add_option("--force", force,
+                  "force source: pressure (brake_gain_n_per_bar x pressure_bar) or tester")
+      ->check(CLI::IsMember({"pressure", "tester"}))
+      ->capture_default_str();
+}
+
+}  // namespace
+
+void add_replay_command(CLI::App& app) {
+  struct Opts {
+    std::vector<std::string> files;
+    std::string model, report, force = "pressure", method = "all";
+    bool json = false;
+    RunOptions run;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = app.add_subcommand(
+      "replay", "Replay recorded tests (candump logs or event CSVs) through the pipeline");
+  cmd->add_option("runs", o->files, "candump logs or event CSVs")->required();
+  cmd->add_option("--model", o->model,
+                  "trained model (default: $BRAKEFIT_MODEL or the shipped model)");
+  cmd->add_option("--method", o->method, "som|mlp|lm|hybrid|all")
+      ->check(CLI::IsMember({"som", "mlp", "lm", "hybrid", "all"}))
+      ->capture_default_str();
+  cmd->add_flag("--json", o->json, "one brakefit.event/1 JSON document per event, one per line");
+  cmd->add_option("--report", o->report, "directory for per-event SVG plots and events.jsonl");
+  add_run_options(cmd, o->run, o->force);
+  cmd->callback([o] {
+    const Model model = load_model(resolve_model_path(o->model));
+    o->run.pipeline.force =
+        o->force == "tester" ? pipeline::ForceSource::Tester : pipeline::ForceSource::Pressure;
+    if (o->method != "all") {
+      Method m{};
+      parse(o->method, m);
+      o->run.pipeline.methods = {m};
+    }
+    std::vector<Run> runs;
+    for (const auto& f : o->files) {
+      spdlog::info("replaying {}", f);
+      runs.push_back(process_run(f, o->run, &model));
+    }
+    if (!o->report.empty()) std::filesystem::create_directories(o->report);
+    std::string jsonl;
+    for (const Run& run : runs) {
+      for (const auto& e : run.events) {
+        const auto doc = event_json(e, run.path, &model);
+        jsonl += doc.dump() + "\n";
+        if (!o->report.empty() && !e.results.empty()) {
+          const std::string svg =
+              fmt::format("{}/{}-event-{}.svg", o->report,
+                          std::filesystem::path(run.path).stem().string(), e.event.event_id);
+          write_file(svg, plot::fit_chart_svg(
+                              fmt::format("{} event {} ({}, {})", run.path, e.event.event_id,
+                                          can::to_string(e.event.bench), e.event.end_reason),
+                              e.curve, e.results, SlipUnit::Percent));
+        }
+        if (o->json) continue;
+        std::cout << fmt::format(
+            "{} event {}: {} bench, {:.2f} s, {} points to {:.1f} % slip, ended by {}{}\n",
+            run.path, e.event.event_id, can::to_string(e.event.bench),
+            static_cast<double>(e.event.t_end_ns - e.event.t_start_ns) * 1e-9, e.curve.size(),
+            100 * e.curve.max_slip_ratio(), e.event.end_reason,
+            e.event.flags.empty() ? ""
+                                  : fmt::format(" [flags: {}]", fmt::join(e.event.flags, ", ")));
+        for (const auto& r : e.results)
+          std::cout << fmt::format(
+              "  {:<7} B {:>8.3f} C {:>6.4f} D {:>8.1f} E {:>8.4f}  MAPE {:>6.2f} %  RMSE {:>7.1f} "
+              "N{}\n",
+              to_string(r.method), r.params.B, r.params.C, r.params.D, r.params.E,
+              r.metrics.mape_pct, r.metrics.rmse_n,
+              r.peak_reached ? "" : "  (peak beyond the data)");
+      }
+      if (!o->json && run.events.empty()) std::cout << run.path << ": no brake event found\n";
+    }
+    if (o->json) std::cout << jsonl;
+    if (!o->report.empty()) {
+      write_file(o->report + "/events.jsonl", jsonl);
+      spdlog::info("report written to {}", o->report);
+    }
+  });
+}
+
+void add_export_command(CLI::App& app) {
+  struct Opts {
+    std::vector<std::string> files;
+    std::string dir, force = "pressure";
+    RunOptions run;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = app.add_subcommand("export", "Write each brake event of a recording as an event CSV");
+  cmd->add_option("runs", o->files, "candump logs")->required();
+  cmd->add_option("--events", o->dir, "output directory")->required();
+  add_run_options(cmd, o->run, o->force);
+  cmd->callback([o] {
+    o->run.pipeline.fit = false;
+    std::filesystem::create_directories(o->dir);
+    for (const auto& f : o->files) {
+      const Run run = process_run(f, o->run, nullptr);
+      for (const auto& e : run.events) {
+        const std::string out =
+            fmt::format("{}/{}-event-{}.csv", o->dir, std::filesystem::path(f).stem().string(),
+                        e.event.event_id);
+        write_file(out, pipeline::format_event_csv(e.event, run.calibration));
+        std::cout << fmt::format("{}: event {} ({} samples, {}) -> {}\n", f, e.event.event_id,
+                                 e.event.samples.size(), e.event.end_reason, out);
+      }
+    }
+  });
+}
+
+}  // namespace brakefit::cli

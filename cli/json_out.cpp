@@ -1,0 +1,59 @@
+#include "cli/json_out.hpp"
+
+#include "brakefit/version.hpp"
+
+namespace brakefit::cli {
+
+nlohmann::ordered_json num(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
+
+nlohmann::ordered_json result_json(const MethodResult& r) {
+  nlohmann::ordered_json j;
+  j["method"] = to_string(r.method);
+  j["B"] = num(r.params.B);
+  j["C"] = num(r.params.C);
+  j["D"] = num(r.params.D);
+  j["E"] = num(r.params.E);
+  j["mape_pct"] = num(r.metrics.mape_pct);
+  j["mape_points_excluded"] = r.metrics.mape_points_excluded;
+  j["rmse_n"] = num(r.metrics.rmse_n);
+  j["rmse_pct_peak"] = num(r.metrics.rmse_pct_peak);
+  const MfPeak pk = mf_peak(r.params, 1.0);
+  j["peak_force_n"] = num(pk.force_n);
+  j["peak_slip_ratio"] = num(pk.slip_ratio);
+  j["peak_reached"] = r.peak_reached;
+  if (r.stderr_) {
+    const auto& s = *r.stderr_;
+    j["stderr"] = {{"B", num(s[0])}, {"C", num(s[1])}, {"D", num(s[2])}, {"E", num(s[3])}};
+    j["converged"] = r.converged;
+    j["iterations"] = r.iterations;
+  } else {
+    j["stderr"] = nullptr;
+  }
+  if (r.bmu) j["bmu"] = *r.bmu;
+  return j;
+}
+
+nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::string& file,
+                                  const Model* model) {
+  nlohmann::ordered_json j;
+  j["schema"] = "brakefit.event/1";
+  j["version"] = kVersion;
+  j["model_hash"] = model ? nlohmann::ordered_json(model->hash) : nlohmann::ordered_json(nullptr);
+  j["file"] = file;
+  j["event_id"] = e.event.event_id;
+  j["bench"] = can::to_string(e.event.bench);
+  j["t_start_ns"] = e.event.t_start_ns;
+  j["t_end_ns"] = e.event.t_end_ns;
+  j["end_reason"] = e.event.end_reason;
+  j["flags"] = e.event.flags;
+  j["points"] = e.curve.size();
+  j["max_slip_ratio"] = num(e.curve.max_slip_ratio());
+  j["mape_rule"] = kMapeRule;
+  j["results"] = nlohmann::ordered_json::array();
+  for (const auto& r : e.results) j["results"].push_back(result_json(r));
+  return j;
+}
+
+}  // namespace brakefit::cli

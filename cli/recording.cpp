@@ -1,0 +1,57 @@
+#include "cli/recording.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+
+#include "cli/commands.hpp"
+#include "cli/io.hpp"
+#include "core/can/candump.hpp"
+#include "core/pipeline/event_csv.hpp"
+
+namespace brakefit::cli {
+
+Run process_run(const std::string& path, const RunOptions& o, const Model* model) {
+  Run run;
+  run.path = path;
+  const std::string text = read_file(path);
+  if (pipeline::looks_like_event_csv(text)) {
+    const pipeline::EventCsv ev = pipeline::parse_event_csv(text, path);
+    run.calibration = ev.calibration;
+    pipeline::PipelineOptions po = o.pipeline;
+    if (po.force == pipeline::ForceSource::Tester && !ev.has_force)
+      throw InputError(path + ": --force tester needs a force_n column");
+    pipeline::Pipeline p(run.calibration, po, model);
+    for (const auto& s : ev.samples) p.feed(s);
+    p.finish();
+    run.events = std::move(p.events());
+    return run;
+  }
+  std::string bench = o.bench_file;
+  if (bench.empty()) {
+    bench = recording_stem(path) + ".bench.toml";
+    if (!std::filesystem::exists(bench))
+      throw InputError(path + ": no bench calibration: give --bench FILE or put " + bench +
+                       " beside the log");
+  }
+  try {
+    run.calibration = pipeline::parse_calibration(read_file(bench), bench);
+  } catch (const InputError& e) {
+    throw ExitError(kExitConfig, e.what());
+  }
+  const can::CandumpText log = can::parse_candump_text(text, path, o.lenient);
+  run.malformed_lines = log.malformed;
+  run.ignored_lines = log.ignored;
+  if (log.malformed)
+    spdlog::warn("{}: {} malformed lines skipped (--lenient)", path, log.malformed);
+  pipeline::Pipeline p(run.calibration, o.pipeline, model);
+  for (const auto& f : log.frames) p.feed(f);
+  p.finish();
+  run.stats = p.sample_stats();
+  if (run.stats.unknown_ids)
+    spdlog::info("{}: {} frames with unknown ids ignored", path, run.stats.unknown_ids);
+  run.events = std::move(p.events());
+  return run;
+}
+
+}  // namespace brakefit::cli

@@ -1,0 +1,30 @@
+#pragma once
+// Bench calibration: what the replay pipeline needs to turn encoder counts and pressure into
+// speeds, slip and force. Read from a TOML `[bench]` table (a recording's `<stem>.bench.toml`, or
+// the daemon's config); strict validation names the key.
+#include <string>
+#include <string_view>
+
+#include "core/can/layout.hpp"
+
+namespace brakefit::pipeline {
+
+struct Calibration {
+  can::BenchKind bench = can::BenchKind::Roller;
+  double roller_radius_m = 0.1;  ///< 200 mm rollers
+  double wheel_radius_m = 0.3;   ///< rolling radius of the tested wheel
+  double fifth_wheel_radius_m = 0.2;
+  double roller_ppr = 1000;  ///< encoder pulses per revolution (x4 counts = 4 * ppr)
+  double wheel_ppr = 1000;
+  double fifth_wheel_ppr = 1000;
+  double brake_gain_n_per_bar = 66.7;  ///< force = gain * pressure (as in the paper)
+  double wheel_load_n = 3800;
+  double tyre_pressure_bar = 2.2;
+  double speed_kmh = 5.0;  ///< roller set speed or ground start speed
+  double switch_off_slip_ratio = 0.27;
+};
+
+Calibration parse_calibration(std::string_view toml_text, const std::string& source);
+std::string format_calibration(const Calibration& c);
+
+}  // namespace brakefit::pipeline

@@ -1,0 +1,27 @@
+#pragma once
+// Event CSV: one brake event with its bench metadata, so data from other benches can be analysed.
+//   # bench=roller
+//   # wheel_radius_m=0.3  (also wheel_load_n, brake_gain_n_per_bar, tyre_pressure_bar, speed_kmh,
+//   ...) t_s,v_ref_mps,v_wheel_mps,pressure_bar[,force_n]
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/pipeline/calibration.hpp"
+#include "core/pipeline/events.hpp"
+
+namespace brakefit::pipeline {
+
+struct EventCsv {
+  Calibration calibration;
+  std::vector<Sample> samples;
+  bool has_force = false;
+};
+
+/// Throws InputError "SOURCE:LINE: ..." (unknown or malformed keys, missing columns, bad numbers).
+EventCsv parse_event_csv(std::string_view text, const std::string& source);
+std::string format_event_csv(const Event& e, const Calibration& c);
+/// True when the text looks like an event CSV rather than a candump log.
+bool looks_like_event_csv(std::string_view text);
+
+}  // namespace brakefit::pipeline

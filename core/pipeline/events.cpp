@@ -1,0 +1,75 @@
+#include "core/pipeline/events.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace brakefit::pipeline {
+
+std::optional<Event> EventDetector::close(const std::string& reason, bool aborted) {
+  Event e = std::move(*cur_);
+  cur_.reset();
+  armed_ = false;
+  e.end_reason = reason;
+  e.t_end_ns = e.samples.empty() ? e.t_start_ns : e.samples.back().t_ns;
+  if (aborted) e.flags.push_back("aborted");
+  const double dur_s = static_cast<double>(e.t_end_ns - e.t_start_ns) * 1e-9;
+  if (e.samples.size() < set_.min_points || dur_s < set_.min_duration_s)
+    e.flags.push_back("too_short");
+  return e;
+}
+
+std::optional<Event> EventDetector::feed(const Sample& s) {
+  std::optional<Event> done;
+  if (cur_ && static_cast<double>(s.t_ns - last_t_ns_) * 1e-9 > set_.sensor_timeout_s)
+    done = close("sensor_timeout", true);
+  last_t_ns_ = s.t_ns;
+  if (!cur_ && !armed_) {
+    if (s.pressure_bar < set_.release_pressure_bar) armed_ = true;
+    return done;
+  }
+  if (!cur_) {
+    if (s.pressure_bar >= set_.start_pressure_bar && s.v_ref_mps >= set_.min_ref_speed_mps &&
+        !done) {
+      cur_ = Event{};
+      cur_->event_id = next_id_++;
+      cur_->bench = cal_.bench;
+      cur_->t_start_ns = s.t_ns;
+    } else {
+      return done;
+    }
+  }
+  cur_->samples.push_back(s);
+  if (s.sensor_fault &&
+      std::find(cur_->flags.begin(), cur_->flags.end(), "sensor_fault") == cur_->flags.end())
+    cur_->flags.push_back("sensor_fault");
+  const double slip = slip_ratio(s);
+  if (s.v_ref_mps < set_.min_ref_speed_mps) return close("stopped", false);
+  if (slip >= set_.lock_slip_ratio) return close("wheel_lock", false);
+  if (cal_.bench == can::BenchKind::Roller &&
+      (slip >= cal_.switch_off_slip_ratio || s.state == can::TestState::SwitchedOff))
+    return close("switch_off_slip", false);
+  if (s.state == can::TestState::Aborted) return close("tester_aborted", true);
+  if (s.pressure_bar < set_.release_pressure_bar) return close("release", false);
+  return done;
+}
+
+std::optional<Event> EventDetector::finish() {
+  if (!cur_) return std::nullopt;
+  return close("end_of_data", true);
+}
+
+Curve event_curve(const Event& e, const Calibration& c, const EventSettings& s,
+                  ForceSource source) {
+  Curve curve;
+  for (const Sample& smp : e.samples) {
+    if (smp.v_ref_mps < s.min_ref_speed_mps) continue;
+    const double force =
+        source == ForceSource::Tester ? smp.force_n : c.brake_gain_n_per_bar * smp.pressure_bar;
+    if (!std::isfinite(force)) continue;
+    curve.slip_ratio.push_back(std::clamp(slip_ratio(smp), 0.0, 1.0));
+    curve.force_n.push_back(force);
+  }
+  return curve;
+}
+
+}  // namespace brakefit::pipeline

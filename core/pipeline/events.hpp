@@ -1,0 +1,66 @@
+#pragma once
+// Brake event detection on the sample stream: an event starts when the pressure rises past a
+// threshold and ends at the switch-off slip (roller), wheel lock, release of the pedal, the
+// reference stopping, or a sensor timeout (aborted). Too short or aborted events are flagged and
+// not fitted.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/curve.hpp"
+#include "core/pipeline/calibration.hpp"
+#include "core/pipeline/samples.hpp"
+
+namespace brakefit::pipeline {
+
+struct EventSettings {
+  double start_pressure_bar = 2.0;
+  double release_pressure_bar = 1.0;
+  double lock_slip_ratio = 0.95;
+  double min_ref_speed_mps = 0.3;
+  std::size_t min_points = 30;
+  double min_duration_s = 0.2;
+  double sensor_timeout_s = 0.1;  ///< a gap between samples longer than this aborts the event
+};
+
+struct Event {
+  int event_id = 0;
+  can::BenchKind bench = can::BenchKind::Roller;
+  std::int64_t t_start_ns = 0;
+  std::int64_t t_end_ns = 0;
+  std::string
+      end_reason;  ///< switch_off_slip, wheel_lock, release, stopped, sensor_timeout, end_of_data
+  std::vector<std::string> flags;  ///< too_short, aborted, sensor_fault
+  std::vector<Sample> samples;
+  bool fittable() const { return flags.empty(); }
+};
+
+inline double slip_ratio(const Sample& s) {
+  return s.v_ref_mps > 0 ? 1.0 - s.v_wheel_mps / s.v_ref_mps : 0.0;
+}
+
+class EventDetector {
+ public:
+  EventDetector(const Calibration& c, const EventSettings& s) : cal_(c), set_(s) {}
+  /// Returns an event when this sample finished one.
+  std::optional<Event> feed(const Sample& s);
+  /// End of data: a running event is returned, flagged aborted.
+  std::optional<Event> finish();
+
+ private:
+  std::optional<Event> close(const std::string& reason, bool aborted);
+  Calibration cal_;
+  EventSettings set_;
+  std::optional<Event> cur_;
+  int next_id_ = 1;
+  bool armed_ = true;  ///< a new event needs the pedal released first
+  std::int64_t last_t_ns_ = 0;
+};
+
+enum class ForceSource { Pressure, Tester };
+
+/// Slip (Eq. 1) and force of the event's samples with a valid reference speed and the brake
+/// applied: force = brake_gain_n_per_bar * pressure_bar, or the tester's reading.
+Curve event_curve(const Event& e, const Calibration& c, const EventSettings& s, ForceSource source);
+
+}  // namespace brakefit::pipeline

@@ -1,0 +1,35 @@
+#include "core/pipeline/pipeline.hpp"
+
+namespace brakefit::pipeline {
+
+Pipeline::Pipeline(const Calibration& c, const PipelineOptions& o, const Model* model)
+    : cal_(c), opt_(o), model_(model), builder_(c), detector_(c, o.events) {}
+
+void Pipeline::feed(const can::LoggedFrame& f) {
+  if (auto s = builder_.feed(f)) feed(*s);
+}
+
+void Pipeline::feed(const Sample& s) {
+  if (auto e = detector_.feed(s)) handle(std::move(*e));
+}
+
+void Pipeline::finish() {
+  if (auto e = detector_.finish()) handle(std::move(*e));
+}
+
+void Pipeline::handle(Event e) {
+  EventResult r;
+  r.curve = event_curve(e, cal_, opt_.events, opt_.force);
+  if (r.curve.size() < kMinCurvePoints && e.fittable()) e.flags.push_back("too_short");
+  if (opt_.fit && e.fittable()) {
+    const fit::MfFitOptions fo = fit_options_for(model_);
+    for (Method m : opt_.methods) {
+      if (m != Method::Lm && !model_) continue;
+      r.results.push_back(run_method(m, model_, r.curve, fo));
+    }
+  }
+  r.event = std::move(e);
+  events_.push_back(std::move(r));
+}
+
+}  // namespace brakefit::pipeline

@@ -1,0 +1,45 @@
+#pragma once
+// The replay/live pipeline: frames (or samples) in, finished and fitted brake events out. The same
+// code runs in `brakefit replay` and, later, inside brakefitd.
+#include <functional>
+#include <vector>
+
+#include "core/curve_csv.hpp"
+#include "core/identify.hpp"
+#include "core/pipeline/events.hpp"
+
+namespace brakefit::pipeline {
+
+struct PipelineOptions {
+  EventSettings events;
+  ForceSource force = ForceSource::Pressure;
+  std::vector<Method> methods{Method::Som, Method::Mlp, Method::Lm, Method::Hybrid};
+  bool fit = true;  ///< false: detection only (throughput measurement)
+};
+
+struct EventResult {
+  Event event;
+  Curve curve;
+  std::vector<MethodResult> results;  ///< empty for flagged events
+};
+
+class Pipeline {
+ public:
+  Pipeline(const Calibration& c, const PipelineOptions& o, const Model* model);
+  void feed(const can::LoggedFrame& f);
+  void feed(const Sample& s);
+  void finish();
+  std::vector<EventResult>& events() { return events_; }
+  const SampleStats& sample_stats() const { return builder_.stats(); }
+
+ private:
+  void handle(Event e);
+  Calibration cal_;
+  PipelineOptions opt_;
+  const Model* model_;
+  SampleBuilder builder_;
+  EventDetector detector_;
+  std::vector<EventResult> events_;
+};
+
+}  // namespace brakefit::pipeline

@@ -1,0 +1,83 @@
+#include "core/pipeline/samples.hpp"
+
+#include <algorithm>
+
+namespace brakefit::pipeline {
+
+double EncoderSpeed::update(const can::EncoderMsg& m, std::int64_t t_ns) {
+  if (!init_) {
+    init_ = true;
+    last_count_ = m.count_x4_mod;
+    last_edge_us_ = m.edge_time_us;
+    last_edge_frame_ns_ = t_ns;
+    return speed_;
+  }
+  // Differences modulo 2^24 (count) and 2^32 (edge time), as signed values.
+  auto dcount = static_cast<std::int32_t>((m.count_x4_mod - last_count_) & 0xFFFFFFu);
+  if (dcount & 0x800000) dcount -= 0x1000000;
+  const auto dedge_us =
+      static_cast<std::int64_t>(static_cast<std::int32_t>(m.edge_time_us - last_edge_us_));
+  if (dcount != 0 && dedge_us > 0) {
+    speed_ = static_cast<double>(dcount) * m_per_count_ / (static_cast<double>(dedge_us) * 1e-6);
+    last_count_ = m.count_x4_mod;
+    last_edge_us_ = m.edge_time_us;
+    last_edge_frame_ns_ = t_ns;
+  } else {
+    // No new edge: the speed is at most one count over the time since the last edge.
+    const double since_s = static_cast<double>(t_ns - last_edge_frame_ns_) * 1e-9;
+    if (since_s > 0.2)
+      speed_ = 0.0;
+    else if (since_s > 0)
+      speed_ = std::copysign(std::min(std::abs(speed_), m_per_count_ / since_s), speed_);
+  }
+  return speed_;
+}
+
+SampleBuilder::SampleBuilder(const Calibration& c)
+    : cal_(c),
+      ref_(c.bench == can::BenchKind::Roller ? c.roller_ppr : c.fifth_wheel_ppr,
+           c.bench == can::BenchKind::Roller ? c.roller_radius_m : c.fifth_wheel_radius_m),
+      wheel_(c.wheel_ppr, c.wheel_radius_m) {}
+
+std::optional<Sample> SampleBuilder::feed(const can::LoggedFrame& f) {
+  ++stats_.frames;
+  const auto msg = can::decode(f.frame);
+  if (!msg) {
+    ++stats_.unknown_ids;
+    return std::nullopt;
+  }
+  const std::int64_t t_ns = f.t_us * 1000;
+  std::optional<Sample> out;
+  if (const auto* e = std::get_if<can::EncoderMsg>(&*msg)) {
+    const bool is_ref = cal_.bench == can::BenchKind::Roller
+                            ? e->channel == can::Channel::Roller
+                            : e->channel == can::Channel::FifthWheel;
+    if (is_ref) {
+      cur_.v_ref_mps = ref_.update(*e, t_ns);
+      have_ref_ = true;
+    } else if (e->channel == can::Channel::Wheel) {
+      if (last_wheel_counter_ >= 0 &&
+          e->counter != static_cast<std::uint8_t>(last_wheel_counter_ + 1))
+        ++stats_.counter_gaps;
+      last_wheel_counter_ = e->counter;
+      cur_.v_wheel_mps = wheel_.update(*e, t_ns);
+      if (have_ref_ && have_pressure_) {
+        cur_.t_ns = std::max(t_ns, last_t_ns_ + 1);  // strictly monotonic even if the log is not
+        last_t_ns_ = cur_.t_ns;
+        ++stats_.samples;
+        out = cur_;
+      }
+    }
+  } else if (const auto* p = std::get_if<can::PressureMsg>(&*msg)) {
+    cur_.pressure_bar = p->pressure_bar;
+    cur_.sensor_fault = p->status != 0;
+    have_pressure_ = true;
+  } else if (const auto* fm = std::get_if<can::TesterForceMsg>(&*msg)) {
+    cur_.force_n = fm->brake_force_n;
+  } else if (const auto* s = std::get_if<can::TestStateMsg>(&*msg)) {
+    cur_.state = s->state;
+  }
+  return out;
+}
+
+}  // namespace brakefit::pipeline

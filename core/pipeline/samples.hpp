@@ -1,0 +1,64 @@
+#pragma once
+// Frames -> samples: decodes the bench frames, turns encoder counts and edge times into speeds
+// (edge-to-edge timing, so quantisation stays small), holds the latest pressure, tester force and
+// test state, and emits one sample per wheel-encoder frame, each with a monotonic t_ns.
+#include <cmath>
+#include <cstdint>
+#include <optional>
+
+#include "core/can/frame.hpp"
+#include "core/can/layout.hpp"
+#include "core/pipeline/calibration.hpp"
+
+namespace brakefit::pipeline {
+
+struct Sample {
+  std::int64_t t_ns = 0;
+  double v_ref_mps = 0.0;    ///< roller surface (roller bench) or fifth wheel (ground)
+  double v_wheel_mps = 0.0;  ///< tested wheel circumferential speed
+  double pressure_bar = 0.0;
+  double force_n = NAN;  ///< the tester's own force reading, NaN when absent
+  can::TestState state = can::TestState::Idle;
+  bool sensor_fault = false;
+};
+
+/// Speed from a quadrature encoder's x4 count (mod 2^24) and last-edge time (mod 2^32 us).
+class EncoderSpeed {
+ public:
+  EncoderSpeed(double ppr, double radius_m) : m_per_count_(2.0 * M_PI * radius_m / (4.0 * ppr)) {}
+  /// Updates with a frame received at t_ns; returns the speed in m/s.
+  double update(const can::EncoderMsg& m, std::int64_t t_ns);
+  double speed_mps() const { return speed_; }
+
+ private:
+  double m_per_count_;
+  bool init_ = false;
+  std::uint32_t last_count_ = 0, last_edge_us_ = 0;
+  std::int64_t last_edge_frame_ns_ = 0;
+  double speed_ = 0.0;
+};
+
+struct SampleStats {
+  std::size_t frames = 0;
+  std::size_t unknown_ids = 0;  ///< counted and ignored
+  std::size_t samples = 0;
+  std::size_t counter_gaps = 0;  ///< lost frames detected by rolling counters
+};
+
+class SampleBuilder {
+ public:
+  explicit SampleBuilder(const Calibration& c);
+  std::optional<Sample> feed(const can::LoggedFrame& f);
+  const SampleStats& stats() const { return stats_; }
+
+ private:
+  Calibration cal_;
+  EncoderSpeed ref_, wheel_;
+  Sample cur_;
+  bool have_ref_ = false, have_pressure_ = false;
+  std::int64_t last_t_ns_ = INT64_MIN;
+  int last_wheel_counter_ = -1;
+  SampleStats stats_;
+};
+
+}  // namespace brakefit::pipeline
