@@ -1,0 +1,151 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "core/can/candump.hpp"
+#include "core/can/layout.hpp"
+#include "core/curve.hpp"
+
+using namespace brakefit;
+using namespace brakefit::can;
+
+namespace {
+
+std::string read(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+TEST(Dbc, CompiledLayoutMatchesConfigDbcFile) {
+  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/config/brakefit.dbc";
+  const auto dbc = parse_dbc(read(path), path);
+  ASSERT_EQ(dbc.size(), layout().size());
+  for (const MessageDef& m : layout()) {
+    const auto it =
+        std::find_if(dbc.begin(), dbc.end(), [&](const MessageDef& d) { return d.id == m.id; });
+    ASSERT_NE(it, dbc.end()) << m.name;
+    EXPECT_EQ(it->name, m.name);
+    EXPECT_EQ(it->dlc, m.dlc);
+    ASSERT_EQ(it->signals.size(), m.signals.size()) << m.name;
+    for (std::size_t i = 0; i < m.signals.size(); ++i) {
+      const SignalDef &a = it->signals[i], &b = m.signals[i];
+      EXPECT_EQ(a.name, b.name);
+      EXPECT_EQ(a.start_bit, b.start_bit) << m.name << "." << b.name;
+      EXPECT_EQ(a.length, b.length) << m.name << "." << b.name;
+      EXPECT_EQ(a.is_signed, b.is_signed) << m.name << "." << b.name;
+      EXPECT_DOUBLE_EQ(a.scale, b.scale) << m.name << "." << b.name;
+      EXPECT_DOUBLE_EQ(a.offset, b.offset);
+      EXPECT_DOUBLE_EQ(a.min, b.min) << m.name << "." << b.name;
+      EXPECT_DOUBLE_EQ(a.max, b.max) << m.name << "." << b.name;
+      EXPECT_EQ(a.unit, b.unit) << m.name << "." << b.name;
+    }
+  }
+}
+
+TEST(Dbc, MalformedOrUnsupportedLinesNameTheLine) {
+  EXPECT_THROW(parse_dbc("BO_ 1 A: 8 X\n SG_ s : 0|8@0+ (1,0) [0|1] \"\" X\n", "x.dbc"),
+               InputError);
+  try {
+    parse_dbc("BO_ 1 A: 8 X\n SG_ s : 60|8@1+ (1,0) [0|1] \"\" X\n", "x.dbc");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("x.dbc:2: signal s does not fit", 0), 0u);
+  }
+}
+
+TEST(Codec, RoundTripsEveryMessageAtItsResolution) {
+  EncoderMsg e{Channel::FifthWheel, 0xABCDEF, 4000000000u, 200};
+  const auto de = std::get<EncoderMsg>(*decode(encode(e)));
+  EXPECT_EQ(de.channel, Channel::FifthWheel);
+  EXPECT_EQ(de.count_x4_mod, 0xABCDEFu);
+  EXPECT_EQ(de.edge_time_us, 4000000000u);
+  EXPECT_EQ(de.counter, 200);
+  PressureMsg p{123.456, 1, 7, 99};
+  const auto dp = std::get<PressureMsg>(*decode(encode(p)));
+  EXPECT_NEAR(dp.pressure_bar, 123.46, 1e-9);
+  EXPECT_EQ(dp.status, 1);
+  TesterForceMsg f{-4321.26, 3, 5};
+  EXPECT_NEAR(std::get<TesterForceMsg>(*decode(encode(f))).brake_force_n, -4321.3, 1e-6);
+  TestStateMsg s{TestState::SwitchedOff, BenchKind::Ground, 9, 40.0, 1};
+  const auto ds = std::get<TestStateMsg>(*decode(encode(s)));
+  EXPECT_EQ(ds.state, TestState::SwitchedOff);
+  EXPECT_EQ(ds.bench, BenchKind::Ground);
+  EXPECT_NEAR(ds.set_speed_kmh, 40.0, 1e-9);
+  // Out-of-range values clamp to the signal's range instead of wrapping.
+  PressureMsg big{1e6, 0, 0, 0};
+  EXPECT_NEAR(std::get<PressureMsg>(*decode(encode(big))).pressure_bar, 655.35, 1e-9);
+  // Unknown ids and remote frames are not decoded.
+  Frame unknown;
+  unknown.id = 0x555;
+  EXPECT_FALSE(decode(unknown));
+  Frame remote = encode(p);
+  remote.remote = true;
+  EXPECT_FALSE(decode(remote));
+}
+
+TEST(Candump, FormatsLikeCandumpAndParsesBack) {
+  LoggedFrame f{1700000000123456, "can0", encode(PressureMsg{10.0, 0, 1, 2})};
+  const std::string line = format_candump_line(f);
+  EXPECT_EQ(line, "(1700000000.123456) can0 110#E803000102000000");
+  const auto back = parse_candump_line(line);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->t_us, f.t_us);
+  EXPECT_EQ(format_frame_text(back->frame), "110#E803000102000000");
+  Frame ext;
+  ext.id = 0x1ABCDEF0;
+  ext.extended = true;
+  ext.len = 2;
+  ext.data[0] = 0x0A;
+  ext.data[1] = 0xFF;
+  EXPECT_EQ(format_frame_text(ext), "1ABCDEF0#0AFF");
+  Frame rtr;
+  rtr.id = 0x12;
+  rtr.remote = true;
+  rtr.len = 3;
+  EXPECT_EQ(format_frame_text(rtr), "012#R3");
+}
+
+TEST(Candump, ReplaysTheCommittedCandumpLFixture) {
+  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/tests/fixtures/candump_L.log";
+  const CandumpText t = parse_candump_text(read(path), path, false);
+  EXPECT_EQ(t.frames.size(), 10u);
+  EXPECT_EQ(t.ignored, 3u);  // comment, text line, blank line
+  EXPECT_TRUE(t.frames[1].frame.extended);
+  EXPECT_EQ(t.frames[1].frame.id, 0x12345678u);
+  EXPECT_TRUE(t.frames[3].frame.remote);
+  EXPECT_EQ(t.frames[3].iface, "can1");
+  EXPECT_EQ(t.frames[4].frame.len, 5);
+  EXPECT_EQ(t.frames[6].frame.len, 3);  // dot-separated data
+  EXPECT_TRUE(t.frames[7].frame.fd);
+  EXPECT_EQ(t.frames[7].frame.fd_flags, 1);
+  EXPECT_EQ(t.frames[7].frame.len, 8);
+  EXPECT_EQ(t.frames[8].frame.len, 0);
+  // Every frame prints back to its text.
+  EXPECT_EQ(format_candump_line(t.frames[7]), "(1700000000.000450) can0 456##1AABBCCDDEEFF0011");
+  // The decodable frames decode; the rest are not in the layout.
+  std::size_t known = 0;
+  for (const auto& f : t.frames) known += decode(f.frame).has_value();
+  EXPECT_EQ(known, 4u);
+}
+
+TEST(Candump, MalformedLinesGiveTheLineNumberOrAreCountedWhenLenient) {
+  const std::string text =
+      "(1700000000.000100) can0 100#00\n(1700000000.0001) can0 100#00\n(1700000000.000300) can0 "
+      "1000#00\n"
+      "(1700000000.000400) can0 100#0\n(1700000000.000500) can0 100#0011223344556677889\n"
+      "(1700000000.000600) can0 1G0#00\n(1700000000.000700) can0\n";
+  try {
+    parse_candump_text(text, "bad.log", false);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("bad.log:2: timestamp", 0), 0u) << e.what();
+  }
+  const CandumpText t = parse_candump_text(text, "bad.log", true);
+  EXPECT_EQ(t.frames.size(), 1u);
+  EXPECT_EQ(t.malformed, 6u);
+}
