@@ -22,6 +22,7 @@ void add_simulate_command(CLI::App& app) {
   struct Opts {
     std::string scenario, out, ramp;
     std::int64_t seed = -1;
+    double tyre_pressure_bar = 0.0;
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand(
@@ -34,6 +35,9 @@ void add_simulate_command(CLI::App& app) {
       ->required();
   cmd->add_option("--ramp", o->ramp, "override the pedal ramp: slow, medium, fast or bar/s");
   cmd->add_option("--seed", o->seed, "override the scenario seed");
+  cmd->add_option("--tyre-pressure", o->tyre_pressure_bar,
+                  "override the tyre inflation pressure [bar]")
+      ->check(CLI::Range(0.5, 10.0));
   cmd->callback([o] {
     const std::string text = read_file(o->scenario);
     sim::Scenario sc;
@@ -47,6 +51,7 @@ void add_simulate_command(CLI::App& app) {
       throw ExitError(kExitConfig, e.what());
     }
     if (o->seed >= 0) sc.seed = static_cast<std::uint64_t>(o->seed);
+    if (o->tyre_pressure_bar > 0) sc.tyre_pressure_bar = o->tyre_pressure_bar;
     const sim::SimResult r = sim::simulate(sc);
     drivers::write_candump_file(o->out, r.frames);
     const std::string stem = recording_stem(o->out);

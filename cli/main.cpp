@@ -31,6 +31,7 @@ int run(int argc, char** argv) {
   brakefit::cli::add_simulate_command(app);
   brakefit::cli::add_replay_command(app);
   brakefit::cli::add_export_command(app);
+  brakefit::cli::add_compare_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

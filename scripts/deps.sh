@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages brakefit needs (only the missing ones). Sourced by demo and test.
 set -euo pipefail
-BRAKEFIT_DEBS=(build-essential cmake ninja-build ccache pkg-config python3 libxml2-utils
+BRAKEFIT_DEBS=(build-essential cmake ninja-build ccache pkg-config python3 libxml2-utils can-utils
   libeigen3-dev libspdlog-dev libfmt-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libssl-dev libgtest-dev libgmock-dev libbenchmark-dev)
 

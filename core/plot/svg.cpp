@@ -66,7 +66,7 @@ std::string fmt_tick(double v, double step) {
 }  // namespace
 
 std::string render_svg(const XyChart& c) {
-  const double ml = 80, mr = 190, mt = 50, mb = 60;
+  const double ml = 80, mr = 230, mt = 50, mb = 60;
   const double pw = c.width - ml - mr, ph = c.height - mt - mb;
   double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
   for (const auto& s : c.series)

@@ -30,7 +30,7 @@ struct XyChart {
   std::string x_label;  ///< with unit, e.g. "slip [%]"
   std::string y_label;  ///< with unit, e.g. "brake force [N]"
   std::vector<Series> series;
-  int width = 760;
+  int width = 800;
   int height = 500;
 };
 

@@ -1,0 +1,227 @@
+// brakefit compare A B: the paper's Table VI (parameters side by side, with uncertainties) and
+// Fig. 7 (the two fitted curves overlaid), plus each side's peak brake force and slip at the peak.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+#include "brakefit/version.hpp"
+#include "cli/commands.hpp"
+#include "cli/io.hpp"
+#include "cli/json_out.hpp"
+#include "cli/recording.hpp"
+#include "core/plot/svg.hpp"
+
+namespace brakefit::cli {
+
+namespace {
+
+struct Side {
+  std::string label;
+  std::vector<std::string> files;
+  std::vector<MethodResult> fits;  ///< one per fitted event
+  std::vector<Curve> curves;
+  MfParams mean;                        ///< fit to the pooled points of all events
+  std::array<double, 4> uncertainty{};  ///< standard errors of that fit
+  std::array<double, 4> spread{};  ///< standard deviation of the per-event fits (NaN for one event)
+  double rmse_n = 0.0;
+  double peak_force_n = 0.0, peak_slip_ratio = 0.0;
+};
+
+std::vector<std::string> expand(const std::string& p) {
+  if (!std::filesystem::is_directory(p)) return {p};
+  std::vector<std::string> out;
+  for (const auto& e : std::filesystem::directory_iterator(p)) {
+    const auto ext = e.path().extension().string();
+    if (ext == ".log" || ext == ".csv") out.push_back(e.path().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+Side load_side(const std::string& path, const RunOptions& ro, const Model& model, Method method) {
+  Side s;
+  s.label = std::filesystem::path(path).filename().string();
+  s.files = expand(path);
+  if (s.files.empty()) throw InputError(path + ": no .log or .csv runs in this directory");
+  for (const auto& f : s.files) {
+    Run run = process_run(f, ro, &model);
+    for (auto& e : run.events) {
+      for (auto& r : e.results)
+        if (r.method == method) {
+          s.fits.push_back(r);
+          s.curves.push_back(e.curve);
+        }
+    }
+  }
+  if (s.fits.empty()) throw InputError(path + ": no fitted brake event");
+  // One fit to the pooled points: averaging nonlinear parameters of poorly identified fits would
+  // give a curve that goes through none of the data.
+  Curve pooled;
+  for (const auto& c : s.curves) {
+    pooled.slip_ratio.insert(pooled.slip_ratio.end(), c.slip_ratio.begin(), c.slip_ratio.end());
+    pooled.force_n.insert(pooled.force_n.end(), c.force_n.begin(), c.force_n.end());
+  }
+  const MethodResult all = run_method(method, &model, pooled, fit_options_for(&model));
+  s.mean = all.params;
+  s.rmse_n = all.metrics.rmse_n;
+  for (std::size_t k = 0; k < 4; ++k) s.uncertainty[k] = all.stderr_ ? (*all.stderr_)[k] : NAN;
+  const double n = static_cast<double>(s.fits.size());
+  std::array<double, 4> sum{}, sq{};
+  for (const auto& r : s.fits) {
+    const double v[4] = {r.params.B, r.params.C, r.params.D, r.params.E};
+    for (std::size_t k = 0; k < 4; ++k) sum[k] += v[k], sq[k] += v[k] * v[k];
+  }
+  for (std::size_t k = 0; k < 4; ++k)
+    s.spread[k] =
+        s.fits.size() > 1 ? std::sqrt(std::max(0.0, (sq[k] - sum[k] * sum[k] / n) / (n - 1))) : NAN;
+  const MfPeak pk = mf_peak(s.mean, 1.0);
+  s.peak_force_n = pk.force_n;
+  s.peak_slip_ratio = pk.slip_ratio;
+  return s;
+}
+
+nlohmann::ordered_json side_json(const Side& s) {
+  nlohmann::ordered_json j;
+  j["label"] = s.label;
+  j["files"] = s.files;
+  j["events"] = s.fits.size();
+  j["B"] = num(s.mean.B);
+  j["C"] = num(s.mean.C);
+  j["D"] = num(s.mean.D);
+  j["E"] = num(s.mean.E);
+  j["uncertainty"] = {{"B", num(s.uncertainty[0])},
+                      {"C", num(s.uncertainty[1])},
+                      {"D", num(s.uncertainty[2])},
+                      {"E", num(s.uncertainty[3])}};
+  j["uncertainty_kind"] = "standard error of the fit to the pooled points";
+  j["spread_over_events"] = {{"B", num(s.spread[0])},
+                             {"C", num(s.spread[1])},
+                             {"D", num(s.spread[2])},
+                             {"E", num(s.spread[3])}};
+  j["rmse_n"] = num(s.rmse_n);
+  j["peak_force_n"] = num(s.peak_force_n);
+  j["peak_slip_ratio"] = num(s.peak_slip_ratio);
+  return j;
+}
+
+}  // namespace
+
+void add_compare_command(CLI::App& app) {
+  struct Opts {
+    std::string a, b, model, svg, method = "hybrid", force = "pressure";
+    bool json = false;
+    RunOptions run;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = app.add_subcommand(
+      "compare", "Compare two recordings or event sets (e.g. roller vs flat ground)");
+  cmd->add_option("a", o->a,
+                  "first recording, event CSV or directory of them (e.g. the roller tests)")
+      ->required();
+  cmd->add_option("b", o->b,
+                  "second recording, event CSV or directory (e.g. the flat-ground tests)")
+      ->required();
+  cmd->add_option("--method", o->method, "identification method")
+      ->check(CLI::IsMember({"som", "mlp", "lm", "hybrid"}))
+      ->capture_default_str();
+  cmd->add_option("--model", o->model,
+                  "trained model (default: $BRAKEFIT_MODEL or the shipped model)");
+  cmd->add_flag("--json", o->json, "print a brakefit.compare/1 JSON document");
+  cmd->add_option("--svg", o->svg, "write the two fitted curves overlaid (paper Fig. 7)");
+  cmd->add_option("--force", o->force, "force source: pressure or tester")
+      ->check(CLI::IsMember({"pressure", "tester"}))
+      ->capture_default_str();
+  cmd->callback([o] {
+    const Model model = load_model(resolve_model_path(o->model));
+    Method method{};
+    parse(o->method, method);
+    o->run.pipeline.methods = {method};
+    o->run.pipeline.force =
+        o->force == "tester" ? pipeline::ForceSource::Tester : pipeline::ForceSource::Pressure;
+    const Side a = load_side(o->a, o->run, model, method),
+               b = load_side(o->b, o->run, model, method);
+    if (!o->svg.empty()) {
+      plot::XyChart c;
+      c.title = fmt::format("{} vs {} ({} fits)", a.label, b.label, o->method);
+      c.x_label = "slip [%]";
+      c.y_label = "brake force [N]";
+      const Side* sides[2] = {&a, &b};
+      for (int i = 0; i < 2; ++i) {
+        const Side& s = *sides[i];
+        plot::Series pts{s.label + " measured",          {},   {}, true,
+                         i == 0 ? "#9ecae1" : "#fcae91", false};
+        for (const auto& cv : s.curves)
+          for (std::size_t k = 0; k < cv.size(); k += std::max<std::size_t>(1, cv.size() / 150)) {
+            pts.x.push_back(100 * cv.slip_ratio[k]);
+            pts.y.push_back(cv.force_n[k]);
+          }
+        c.series.push_back(std::move(pts));
+      }
+      for (int i = 0; i < 2; ++i) {
+        const Side& s = *sides[i];
+        plot::Series line{fmt::format("{} fit", s.label), {},   {}, false,
+                          i == 0 ? "#1f77b4" : "#d62728", false};
+        for (int k = 0; k <= 200; ++k) {
+          line.x.push_back(0.5 * k);
+          line.y.push_back(mf_force_n(s.mean, 0.005 * k));
+        }
+        c.series.push_back(std::move(line));
+      }
+      write_file(o->svg, plot::render_svg(c));
+      spdlog::info("comparison plot written to {}", o->svg);
+    }
+    if (o->json) {
+      nlohmann::ordered_json j;
+      j["schema"] = "brakefit.compare/1";
+      j["version"] = kVersion;
+      j["model_hash"] = model.hash;
+      j["method"] = o->method;
+      j["a"] = side_json(a);
+      j["b"] = side_json(b);
+      j["ratio_b_over_a"] = {{"B", num(b.mean.B / a.mean.B)},
+                             {"C", num(b.mean.C / a.mean.C)},
+                             {"D", num(b.mean.D / a.mean.D)},
+                             {"peak_force", num(b.peak_force_n / a.peak_force_n)}};
+      std::cout << j.dump() << "\n";
+      return;
+    }
+    auto cell = [](double v, double u, int prec) {
+      return std::isfinite(u) ? fmt::format("{:.{}f} ± {:.{}f}", v, prec, u, prec)
+                              : fmt::format("{:.{}f}", v, prec);
+    };
+    std::cout << fmt::format(
+        "Pac96 parameters: {} fit to the pooled points of each side (± standard error; "
+        "[spread] = std of the per-event fits)\n",
+        o->method);
+    std::cout << fmt::format("  {:<22} {:>24} {:>24} {:>8}\n", "parameter",
+                             a.label + fmt::format(" ({})", a.fits.size()),
+                             b.label + fmt::format(" ({})", b.fits.size()), "B/A");
+    const char* names[4] = {"B [1/-]", "C", "D [N]", "E"};
+    const double va[4] = {a.mean.B, a.mean.C, a.mean.D, a.mean.E},
+                 vb[4] = {b.mean.B, b.mean.C, b.mean.D, b.mean.E};
+    const int prec[4] = {3, 4, 1, 4};  // NOLINT
+    for (std::size_t k = 0; k < 4; ++k) {
+      std::cout << fmt::format("  {:<22} {:>24} {:>24} {:>8.3f}\n", names[k],
+                               cell(va[k], a.uncertainty[k], prec[k]),
+                               cell(vb[k], b.uncertainty[k], prec[k]), vb[k] / va[k]);
+      if (std::isfinite(a.spread[k]) || std::isfinite(b.spread[k]))
+        std::cout << fmt::format("  {:<22} {:>24} {:>24}\n", "",
+                                 fmt::format("[{:.{}f}]", a.spread[k], prec[k]),
+                                 fmt::format("[{:.{}f}]", b.spread[k], prec[k]));
+    }
+    std::cout << fmt::format("  {:<22} {:>24.1f} {:>24.1f}\n", "RMSE of the fit [N]", a.rmse_n,
+                             b.rmse_n);
+    std::cout << fmt::format("  {:<22} {:>24.4f} {:>24.4f} {:>8.3f}\n", "B [1/%] (paper unit)",
+                             a.mean.B / 100, b.mean.B / 100, b.mean.B / a.mean.B);
+    std::cout << fmt::format("  {:<22} {:>24.1f} {:>24.1f} {:>8.3f}\n", "peak brake force [N]",
+                             a.peak_force_n, b.peak_force_n, b.peak_force_n / a.peak_force_n);
+    std::cout << fmt::format("  {:<22} {:>24.2f} {:>24.2f} {:>8.3f}\n", "slip at peak [%]",
+                             100 * a.peak_slip_ratio, 100 * b.peak_slip_ratio,
+                             b.peak_slip_ratio / a.peak_slip_ratio);
+  });
+}
+
+}  // namespace brakefit::cli
