@@ -1,0 +1,163 @@
+"""Recorded tests: simulate, replay, export, compare, and candump compatibility with can-utils."""
+import glob
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+import unittest
+import xml.etree.ElementTree as ET
+
+from test_cli import BIN, ROOT, run, svg_series, write
+
+REC = os.path.join(ROOT, "data", "recorded")
+SCEN = os.path.join(ROOT, "sim", "scenarios")
+
+
+class Simulate(unittest.TestCase):
+    def test_writes_log_calibration_and_truth(self):
+        with tempfile.TemporaryDirectory() as d:
+            out = os.path.join(d, "r.log")
+            r = run("simulate", os.path.join(SCEN, "roller_car.toml"), "--ramp", "fast", "--out", out)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("ended by switch_off_slip", r.stdout)
+            truth = json.load(open(os.path.join(d, "r.truth.json")))
+            self.assertEqual(truth["schema"], "brakefit.truth/1")
+            self.assertEqual(truth["ramp_bar_per_s"], 60.0)
+            self.assertIn("roller_friction", truth["effects"])
+            self.assertTrue(os.path.exists(os.path.join(d, "r.bench.toml")))
+            with open(out) as f:
+                first = f.readline()
+            self.assertRegex(first, r"^\(\d{10}\.\d{6}\) can0 [0-9A-F]{3}#[0-9A-F]{16}$")
+
+    def test_shipped_recordings_are_reproducible(self):
+        with tempfile.TemporaryDirectory() as d:
+            out = os.path.join(d, "x.log")
+            # make.sh: roller at 2.2 bar, slow ramp, is the 7th recording (seed 107).
+            r = run("simulate", os.path.join(SCEN, "roller_car.toml"), "--ramp", "slow", "--tyre-pressure", "2.2",
+                    "--seed", "107", "--out", out)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(out) as a, open(os.path.join(REC, "roller_2p2bar_slow.log")) as b:
+                self.assertEqual(a.read(), b.read())
+
+    def test_bad_scenario_exits_78_naming_the_key(self):
+        with tempfile.TemporaryDirectory() as d:
+            sc = write(d, "s.toml", "[effects]\nroller_friction = 3.0\n")
+            r = run("simulate", sc, "--out", os.path.join(d, "x.log"))
+            self.assertEqual(r.returncode, 78)
+            self.assertIn("key 'effects.roller_friction'", r.stderr)
+
+
+class Replay(unittest.TestCase):
+    def test_json_events_and_report(self):
+        log = os.path.join(REC, "roller_1p0bar_medium.log")
+        with tempfile.TemporaryDirectory() as d:
+            r = run("replay", "--json", "--report", d, log)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            docs = [json.loads(l) for l in r.stdout.splitlines()]
+            self.assertEqual(len(docs), 1)
+            doc = docs[0]
+            for k in ("schema", "version", "model_hash", "event_id", "bench", "t_start_ns", "t_end_ns",
+                      "end_reason", "flags", "points", "results"):
+                self.assertIn(k, doc)
+            self.assertEqual(doc["schema"], "brakefit.event/1")
+            self.assertEqual(doc["bench"], "roller")
+            self.assertEqual(doc["end_reason"], "switch_off_slip")
+            self.assertEqual(doc["flags"], [])
+            self.assertGreater(doc["t_end_ns"], doc["t_start_ns"])
+            self.assertEqual([x["method"] for x in doc["results"]], ["som", "mlp", "lm", "hybrid"])
+            hybrid = doc["results"][3]
+            truth = json.load(open(log.replace(".log", ".truth.json")))["pac96_equivalent"]
+            self.assertAlmostEqual(hybrid["D"] / truth["D"], 1.0, delta=0.15)  # effects on: bias expected
+            _, series = svg_series(os.path.join(d, "roller_1p0bar_medium-event-1.svg"))
+            self.assertEqual(series[0], "measured")
+            self.assertEqual(len(series), 5)
+            self.assertEqual(len(open(os.path.join(d, "events.jsonl")).read().splitlines()), 1)
+
+    def test_tester_force_and_missing_calibration(self):
+        with tempfile.TemporaryDirectory() as d:
+            shutil.copy(os.path.join(REC, "roller_2p2bar_fast.log"), d)
+            log = os.path.join(d, "roller_2p2bar_fast.log")
+            r = run("replay", log)
+            self.assertEqual(r.returncode, 65)
+            self.assertIn("no bench calibration", r.stderr)
+            r = run("replay", "--json", "--force", "tester", "--method", "lm", "--bench",
+                    os.path.join(REC, "roller_2p2bar_fast.bench.toml"), log)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertEqual(len(json.loads(r.stdout)["results"]), 1)
+
+    def test_malformed_log_line_and_lenient(self):
+        with tempfile.TemporaryDirectory() as d:
+            with open(os.path.join(REC, "roller_2p2bar_fast.log")) as f:
+                lines = f.readlines()
+            lines.insert(5, "(1700000000.005000) can0 10#ZZ\n")
+            log = write(d, "bad.log", "".join(lines))
+            shutil.copy(os.path.join(REC, "roller_2p2bar_fast.bench.toml"), os.path.join(d, "bad.bench.toml"))
+            r = run("replay", log)
+            self.assertEqual(r.returncode, 65)
+            self.assertIn(log + ":6:", r.stderr)
+            r = run("replay", "--lenient", "--json", log)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("1 malformed lines skipped", r.stderr)
+            self.assertEqual(json.loads(r.stdout)["end_reason"], "switch_off_slip")
+
+
+class ExportAndCompare(unittest.TestCase):
+    def test_export_then_replay_the_event_csv(self):
+        with tempfile.TemporaryDirectory() as d:
+            r = run("export", os.path.join(REC, "ground_2p2bar_150barps.log"), "--events", d)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            csvs = glob.glob(os.path.join(d, "*.csv"))
+            self.assertEqual(len(csvs), 1)
+            text = open(csvs[0]).read()
+            for key in ("bench=ground", "wheel_radius_m=", "wheel_load_n=", "brake_gain_n_per_bar=",
+                        "tyre_pressure_bar=", "speed_kmh="):
+                self.assertIn("# " + key, text)
+            self.assertIn("t_s,v_ref_mps,v_wheel_mps,pressure_bar\n", text)
+            a = json.loads(run("replay", "--json", "--method", "hybrid", csvs[0]).stdout)
+            b = json.loads(run("replay", "--json", "--method", "hybrid",
+                               os.path.join(REC, "ground_2p2bar_150barps.log")).stdout)
+            self.assertEqual(a["points"], b["points"])
+            self.assertAlmostEqual(a["results"][0]["D"], b["results"][0]["D"], delta=1e-3 * b["results"][0]["D"])
+
+    def test_compare_roller_and_ground(self):
+        with tempfile.TemporaryDirectory() as d:
+            svg = os.path.join(d, "c.svg")
+            r = run("compare", "--json", "--svg", svg, os.path.join(REC, "roller_1p0bar_slow.log"),
+                    os.path.join(REC, "ground_1p0bar_100barps.log"))
+            self.assertEqual(r.returncode, 0, r.stderr)
+            doc = json.loads(r.stdout)
+            self.assertEqual(doc["schema"], "brakefit.compare/1")
+            for side in ("a", "b"):
+                for k in ("B", "C", "D", "E", "uncertainty", "peak_force_n", "peak_slip_ratio", "events"):
+                    self.assertIn(k, doc[side])
+            self.assertGreater(doc["b"]["peak_force_n"], doc["a"]["peak_force_n"])
+            root, series = svg_series(svg)
+            self.assertEqual(len(series), 4)
+            texts = {t.get("class"): "".join(t.itertext()) for t in root.iter("{http://www.w3.org/2000/svg}text")
+                     if t.get("class")}
+            self.assertEqual(texts["x-label"], "slip [%]")
+            self.assertEqual(texts["y-label"], "brake force [N]")
+
+
+@unittest.skipUnless(shutil.which("log2asc"), "can-utils' log2asc is not installed")
+class CanUtilsCompatibility(unittest.TestCase):
+    def test_log2asc_accepts_every_line_of_our_logs(self):
+        log = os.path.join(REC, "roller_2p2bar_fast.log")
+        r = subprocess.run(["log2asc", "-I", log, "can0"], capture_output=True, text=True, timeout=60)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        frames = [l for l in r.stdout.splitlines() if " Rx " in l]
+        with open(log) as f:
+            self.assertEqual(len(frames), sum(1 for _ in f))
+        # First frame: id 100, 8 data bytes, as written.
+        self.assertRegex(frames[0], r"^\s+0\.000000 1\s+100\s+Rx\s+d 8 08 00 00 89 03 00 00 00$")
+
+    def test_log2asc_reads_the_candump_L_fixture_we_replay(self):
+        fixture = os.path.join(ROOT, "tests", "fixtures", "candump_L.log")
+        r = subprocess.run(["log2asc", "-I", fixture, "can0", "can1", "vcan0"], capture_output=True, text=True,
+                           timeout=60)
+        self.assertEqual(r.returncode, 0, r.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
