@@ -29,7 +29,12 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 MfParams truth_of(const std::string& log) {
   const auto j = nlohmann::json::parse(cli::read_file(cli::recording_stem(log) + ".truth.json"));
   const auto& p = j.at("pac96_equivalent");
-  return {p.at("B").get<double>(), p.at("C").get<double>(), p.at("D").get<double>(), p.at("E").get<double>(), 0, 0};
+  return {p.at("B").get<double>(),
+          p.at("C").get<double>(),
+          p.at("D").get<double>(),
+          p.at("E").get<double>(),
+          0,
+          0};
 }
 
 void identification(const std::string& dir, const Model& model) {
@@ -38,10 +43,14 @@ void identification(const std::string& dir, const Model& model) {
     if (e.path().extension() == ".log") logs.push_back(e.path().string());
   std::sort(logs.begin(), logs.end());
   std::cout << "### Identification on the shipped recordings vs the simulator's ground truth\n\n"
-               "Force from pressure (brake_gain_n_per_bar x pressure_bar, as in the paper); truth = the tyre's "
-               "Pac96 equivalent on that surface at the static load. Realistic effects are on in every recording "
-               "(see each .truth.json), so the errors below are the sim-to-real gap, not fitting error.\n\n"
-               "| recording | method | B fit / true | C fit / true | D fit / true | E fit (true) | RMSE N | MAPE % | peak in data |\n"
+               "Force from pressure (brake_gain_n_per_bar x pressure_bar, as in the paper); truth "
+               "= the tyre's "
+               "Pac96 equivalent on that surface at the static load. Realistic effects are on in "
+               "every recording "
+               "(see each .truth.json), so the errors below are the sim-to-real gap, not fitting "
+               "error.\n\n"
+               "| recording | method | B fit / true | C fit / true | D fit / true | E fit (true) | "
+               "RMSE N | MAPE % | peak in data |\n"
                "|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& log : logs) {
     cli::RunOptions ro;
@@ -49,10 +58,11 @@ void identification(const std::string& dir, const Model& model) {
     const MfParams t = truth_of(log);
     for (const auto& e : run.events)
       for (const auto& r : e.results)
-        std::cout << fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.3f} ({:.3f}) | {:.1f} | {:.2f} | {} |\n",
-                                 std::filesystem::path(log).stem().string(), to_string(r.method), r.params.B / t.B,
-                                 r.params.C / t.C, r.params.D / t.D, r.params.E, t.E, r.metrics.rmse_n,
-                                 r.metrics.mape_pct, r.peak_reached ? "yes" : "no");
+        std::cout << fmt::format(
+            "| {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.3f} ({:.3f}) | {:.1f} | {:.2f} | {} |\n",
+            std::filesystem::path(log).stem().string(), to_string(r.method), r.params.B / t.B,
+            r.params.C / t.C, r.params.D / t.D, r.params.E, t.E, r.metrics.rmse_n,
+            r.metrics.mape_pct, r.peak_reached ? "yes" : "no");
   }
 }
 
@@ -67,19 +77,22 @@ void throughput(const std::string& scenario_log, int repeats) {
       f.t_us += k * span;
       frames.push_back(f);
     }
-  const std::string big = (std::filesystem::temp_directory_path() / "brakefit-throughput.log").string();
+  const std::string big =
+      (std::filesystem::temp_directory_path() / "brakefit-throughput.log").string();
   drivers::write_candump_file(big, frames);
   const std::string bench_toml = cli::recording_stem(scenario_log) + ".bench.toml";
   std::filesystem::copy_file(bench_toml, cli::recording_stem(big) + ".bench.toml",
                              std::filesystem::copy_options::overwrite_existing);
-  spdlog::info("throughput log: {} frames ({} MB)", frames.size(), std::filesystem::file_size(big) / 1000000);
+  spdlog::info("throughput log: {} frames ({} MB)", frames.size(),
+               std::filesystem::file_size(big) / 1000000);
   double ours_best = 1e300, theirs_best = 1e300;
   std::size_t events = 0;
   for (int rep = 0; rep < 3; ++rep) {
     auto t0 = std::chrono::steady_clock::now();
     cli::RunOptions ro;
     ro.pipeline.fit = false;
-    const cli::Run run = cli::process_run(big, ro, nullptr);  // read file + parse + decode + slip + events
+    const cli::Run run =
+        cli::process_run(big, ro, nullptr);  // read file + parse + decode + slip + events
     ours_best = std::min(ours_best, seconds_since(t0));
     events = run.events.size();
     t0 = std::chrono::steady_clock::now();
@@ -92,7 +105,8 @@ void throughput(const std::string& scenario_log, int repeats) {
   std::cout << fmt::format(
       "\n### Replay throughput (best of 3, same log)\n\n"
       "| reader | frames | seconds | frames/s |\n|---|---|---|---|\n"
-      "| brakefit replay pipeline (read, parse, decode, speeds, slip, events; {} events; no fitting) | {} | {:.3f} | {:.3g} |\n"
+      "| brakefit replay pipeline (read, parse, decode, speeds, slip, events; {} events; no "
+      "fitting) | {} | {:.3f} | {:.3g} |\n"
       "| can-utils log2asc (read, parse, write ASC to /dev/null) | {} | {:.3f} | {:.3g} |\n\n"
       "ratio brakefit / log2asc = {:.2f}x (target >= 1x)\n",
       events, frames.size(), ours_best, n / ours_best, frames.size(), theirs_best, n / theirs_best,
@@ -109,7 +123,8 @@ int run(int argc, char** argv) {
   bool skip_throughput = false;
   app.add_option("--dir", dir, "recordings")->capture_default_str();
   app.add_option("--model", model_path, "model");
-  app.add_option("--repeats", repeats, "copies of a recording in the throughput log")->capture_default_str();
+  app.add_option("--repeats", repeats, "copies of a recording in the throughput log")
+      ->capture_default_str();
   app.add_flag("--no-throughput", skip_throughput, "identification table only");
   CLI11_PARSE(app, argc, argv);
   const Model model = cli::load_model(cli::resolve_model_path(model_path));

@@ -1,7 +1,6 @@
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
+#include "tests/unit/test_util.hpp"
 
 #include "core/can/candump.hpp"
 #include "core/can/layout.hpp"
@@ -10,20 +9,9 @@
 using namespace brakefit;
 using namespace brakefit::can;
 
-namespace {
-
-std::string read(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-}  // namespace
-
 TEST(Dbc, CompiledLayoutMatchesConfigDbcFile) {
-  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/config/brakefit.dbc";
-  const auto dbc = parse_dbc(read(path), path);
+  const std::string path = brakefit::test::source_path("config/brakefit.dbc");
+  const auto dbc = parse_dbc(brakefit::test::read_text(path), path);
   ASSERT_EQ(dbc.size(), layout().size());
   for (const MessageDef& m : layout()) {
     const auto it =
@@ -111,8 +99,8 @@ TEST(Candump, FormatsLikeCandumpAndParsesBack) {
 }
 
 TEST(Candump, ReplaysTheCommittedCandumpLFixture) {
-  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/tests/fixtures/candump_L.log";
-  const CandumpText t = parse_candump_text(read(path), path, false);
+  const std::string path = brakefit::test::source_path("tests/fixtures/candump_L.log");
+  const CandumpText t = parse_candump_text(brakefit::test::read_text(path), path, false);
   EXPECT_EQ(t.frames.size(), 10u);
   EXPECT_EQ(t.ignored, 3u);  // comment, text line, blank line
   EXPECT_TRUE(t.frames[1].frame.extended);

@@ -1,7 +1,6 @@
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
+#include "tests/unit/test_util.hpp"
 
 #include "core/curve_csv.hpp"
 #include "core/model_io.hpp"
@@ -41,24 +40,17 @@ std::string load_error(const std::string& text) {
   return "";
 }
 
-std::string read(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 }  // namespace
 
 TEST(TrainConfig, ShippedConfigEqualsBuiltInDefaultsAndRoundTrips) {
-  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/config/train.toml";
-  const TrainConfig shipped = parse_train_config(read(path), path);
+  const std::string path = brakefit::test::source_path("config/train.toml");
+  const TrainConfig shipped = parse_train_config(brakefit::test::read_text(path), path);
   const TrainConfig builtin;
   EXPECT_EQ(format_train_config(shipped), format_train_config(builtin));
   const TrainConfig again = parse_train_config(format_train_config(shipped), "round-trip");
   EXPECT_EQ(format_train_config(again), format_train_config(shipped));
-  const std::string paper = std::string(BRAKEFIT_SOURCE_DIR) + "/config/train-paper.toml";
-  const TrainConfig p = parse_train_config(read(paper), paper);
+  const std::string paper = brakefit::test::source_path("config/train-paper.toml");
+  const TrainConfig p = parse_train_config(brakefit::test::read_text(paper), paper);
   EXPECT_EQ(p.database.preset, "paper");
   EXPECT_EQ(p.som_input, SomInput::Raw);
   EXPECT_DOUBLE_EQ(p.database.families.at(0).E.hi, 50.0);

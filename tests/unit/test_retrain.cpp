@@ -2,21 +2,15 @@
 // in it gives the same map and network within tolerance.
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
-
 #include "core/model_io.hpp"
 #include "core/train.hpp"
+#include "tests/unit/test_util.hpp"
 
 using namespace brakefit;
 
 TEST(ShippedModel, RetrainingFromItsRecordedSettingsReproducesIt) {
-  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/data/models/default.json";
-  std::ifstream in(path);
-  ASSERT_TRUE(in) << path;
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const Model shipped = deserialize_model(ss.str(), path);
+  const std::string path = brakefit::test::source_path("data/models/default.json");
+  const Model shipped = deserialize_model(brakefit::test::read_text(path), path);
   Model again = train_model(shipped.config);
   EXPECT_LT((again.som.codebook() - shipped.som.codebook()).cwiseAbs().maxCoeff(), 1e-6);
   EXPECT_EQ(again.unit_hits, shipped.unit_hits);

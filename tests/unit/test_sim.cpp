@@ -2,9 +2,9 @@
 // effects off, and each effect's signature (shared/docs/physics.md §3).
 #include <gtest/gtest.h>
 
+#include "tests/unit/test_util.hpp"
+
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include "core/can/candump.hpp"
 #include "core/model_io.hpp"
@@ -16,22 +16,15 @@ using namespace brakefit;
 
 namespace {
 
-std::string read(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 sim::Scenario scenario(const std::string& name) {
-  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/sim/scenarios/" + name + ".toml";
-  return sim::parse_scenario(read(path), path);
+  const std::string path = brakefit::test::source_path("sim/scenarios/" + name + ".toml");
+  return sim::parse_scenario(brakefit::test::read_text(path), path);
 }
 
 const Model& model() {
   static const Model m = [] {
-    const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/data/models/default.json";
-    return deserialize_model(read(path), path);
+    const std::string path = brakefit::test::source_path("data/models/default.json");
+    return deserialize_model(brakefit::test::read_text(path), path);
   }();
   return m;
 }
@@ -204,6 +197,42 @@ TEST(Simulator, ChannelTimeOffsetDelaysThePressure) {
   s.effects.time_offset_s = 0.05;
   const auto t1 = only_event(run(s, false)).event.t_start_ns;
   EXPECT_NEAR(static_cast<double>(t1 - t0) * 1e-9, 0.05, 0.002);
+}
+
+TEST(Simulator, WheelInertiaInflatesTheForceFromPressureAfterThePeak) {
+  // I w' = F R - Tb: while the wheel runs away after the peak, gain * p exceeds the tyre force by
+  // I V ds/dt / R^2 -- kilonewtons at 40 km/h.
+  sim::Scenario s = scenario("ground_car");
+  s.effects = sim::Effects{};
+  s.effects.wheel_inertia = true;
+  auto with = run(s, false);
+  const double excess_with_n = only_event(with).curve.peak_abs_force_n() - with.sim.peak_force_n;
+  s.effects.wheel_inertia = false;
+  auto without = run(s, false);
+  const double excess_without_n =
+      only_event(without).curve.peak_abs_force_n() - without.sim.peak_force_n;
+  EXPECT_GT(excess_with_n, 800.0);  // physics.md: 0.8-3 kN on the road after the peak
+  EXPECT_LT(excess_with_n, 3000.0);
+  EXPECT_LT(excess_without_n, 0.1 * without.sim.peak_force_n);
+}
+
+TEST(Simulator, SlipSpeedFrictionLowersTheForceAtSpeed) {
+  sim::Scenario s = scenario("ground_car");
+  s.effects = sim::Effects{};
+  const double off = sim::simulate(s).peak_force_n;
+  s.effects.speed_friction =
+      2.0;  // lambda_mu* = 1 / (1 + 2 Vs / 16.7): Vs about 1.3 m/s at the peak
+  const double on = sim::simulate(s).peak_force_n;
+  EXPECT_LT(on / off, 0.93);
+  EXPECT_GT(on / off, 0.80);
+}
+
+TEST(Simulator, PressureSensorLagDelaysTheRamp) {
+  sim::Scenario s = scenario("ideal_roller");
+  const auto t0 = only_event(run(s, false)).event.t_start_ns;
+  s.effects.pressure_lag_s = 0.05;  // a first-order lag delays a ramp by tau in steady state
+  const auto t1 = only_event(run(s, false)).event.t_start_ns;
+  EXPECT_NEAR(static_cast<double>(t1 - t0) * 1e-9, 0.05, 0.01);
 }
 
 TEST(Pipeline, EventCsvRoundTripGivesTheSameCurve) {
