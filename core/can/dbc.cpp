@@ -75,7 +75,8 @@ std::uint64_t extract_raw(const Frame& f, const SignalDef& s) {
 }
 
 double decode_signal(const Frame& f, const SignalDef& s) {
-  if (s.length == 0 || s.length > 64) return s.offset;  // parse_dbc rejects these; stay defined anyway
+  if (s.length == 0 || s.length > 64)
+    return s.offset;  // parse_dbc rejects these; stay defined anyway
   const std::uint64_t raw = extract_raw(f, s);
   double v;
   if (s.is_signed && s.length < 64 && (raw >> (s.length - 1)) & 1u)
