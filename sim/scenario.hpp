@@ -23,6 +23,8 @@ struct Effects {
   double pressure_noise_bar = 0.0;   ///< pressure sensor noise (sigma)
   double time_offset_s = 0.0;        ///< pressure channel late by this much
   double encoder_ppr = 0.0;          ///< quantisation; 0 = ideal (10^6 ppr)
+  double tester_force_lag_s =
+      0.0;  ///< the tester's force reading: first-order lag; 0 = the contact force
   std::vector<std::string> active() const;
 };
 

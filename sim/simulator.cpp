@@ -152,7 +152,10 @@ SimResult simulate(const Scenario& s) {
         torque = std::clamp(400.0 * err + 4000.0 * motor_integral, 0.0, 2000.0);
       }
       omega_r = std::max(0.0, omega_r + dt * (torque - force * rr) / s.roller_inertia_kgm2);
-      tester_force += dt / 0.02 * (torque / rr - tester_force);
+      // The tester reads the brake force at the roller surface (reaction), through its own lag.
+      tester_force = e.tester_force_lag_s > 0
+                         ? tester_force + dt / e.tester_force_lag_s * (force - tester_force)
+                         : force;
     } else {
       decel = std::max(0.0, force / (s.wheel_brake_share * s.vehicle_mass_kg));
       v_vehicle = std::max(0.0, v_vehicle - dt * decel);

@@ -14,6 +14,7 @@ void Pipeline::feed(const Sample& s) {
 }
 
 void Pipeline::finish() {
+  if (auto s = builder_.flush()) feed(*s);
   if (auto e = detector_.finish()) handle(std::move(*e));
 }
 

@@ -39,15 +39,31 @@ SampleBuilder::SampleBuilder(const Calibration& c)
            c.bench == can::BenchKind::Roller ? c.roller_radius_m : c.fifth_wheel_radius_m),
       wheel_(c.wheel_ppr, c.wheel_radius_m) {}
 
+std::optional<Sample> SampleBuilder::take_pending() {
+  if (!pending_) return std::nullopt;
+  pending_ = false;
+  if (!have_ref_ || !have_pressure_) return std::nullopt;
+  Sample s = cur_;
+  s.t_ns = std::max(pending_t_ns_, last_t_ns_ + 1);  // strictly monotonic even if the log is not
+  last_t_ns_ = s.t_ns;
+  ++stats_.samples;
+  return s;
+}
+
+std::optional<Sample> SampleBuilder::flush() {
+  return take_pending();
+}
+
 std::optional<Sample> SampleBuilder::feed(const can::LoggedFrame& f) {
   ++stats_.frames;
+  const std::int64_t t_ns = f.t_us * 1000;
+  std::optional<Sample> out;
+  if (pending_ && t_ns > pending_t_ns_ + kGroupWindowNs) out = take_pending();
   const auto msg = can::decode(f.frame);
   if (!msg) {
     ++stats_.unknown_ids;
-    return std::nullopt;
+    return out;
   }
-  const std::int64_t t_ns = f.t_us * 1000;
-  std::optional<Sample> out;
   if (const auto* e = std::get_if<can::EncoderMsg>(&*msg)) {
     const bool is_ref = cal_.bench == can::BenchKind::Roller
                             ? e->channel == can::Channel::Roller
@@ -60,13 +76,10 @@ std::optional<Sample> SampleBuilder::feed(const can::LoggedFrame& f) {
           e->counter != static_cast<std::uint8_t>(last_wheel_counter_ + 1))
         ++stats_.counter_gaps;
       last_wheel_counter_ = e->counter;
+      if (pending_) out = take_pending();  // the previous cycle is complete
       cur_.v_wheel_mps = wheel_.update(*e, t_ns);
-      if (have_ref_ && have_pressure_) {
-        cur_.t_ns = std::max(t_ns, last_t_ns_ + 1);  // strictly monotonic even if the log is not
-        last_t_ns_ = cur_.t_ns;
-        ++stats_.samples;
-        out = cur_;
-      }
+      pending_ = true;
+      pending_t_ns_ = t_ns;
     }
   } else if (const auto* p = std::get_if<can::PressureMsg>(&*msg)) {
     cur_.pressure_bar = p->pressure_bar;

@@ -45,17 +45,25 @@ struct SampleStats {
   std::size_t counter_gaps = 0;  ///< lost frames detected by rolling counters
 };
 
+/// A sample is emitted once its time group is complete: at the next wheel-encoder frame or at the
+/// first frame more than kGroupWindowNs after the pending wheel frame, so pressure and force
+/// frames of the same cycle are paired with that cycle's speeds whatever their order on the bus.
 class SampleBuilder {
  public:
+  static constexpr std::int64_t kGroupWindowNs = 500'000;
   explicit SampleBuilder(const Calibration& c);
   std::optional<Sample> feed(const can::LoggedFrame& f);
+  /// The pending sample at the end of the data.
+  std::optional<Sample> flush();
   const SampleStats& stats() const { return stats_; }
 
  private:
   Calibration cal_;
   EncoderSpeed ref_, wheel_;
   Sample cur_;
-  bool have_ref_ = false, have_pressure_ = false;
+  std::optional<Sample> take_pending();
+  bool have_ref_ = false, have_pressure_ = false, pending_ = false;
+  std::int64_t pending_t_ns_ = 0;
   std::int64_t last_t_ns_ = INT64_MIN;
   int last_wheel_counter_ = -1;
   SampleStats stats_;

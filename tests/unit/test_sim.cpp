@@ -35,11 +35,13 @@ struct Replayed {
   std::vector<pipeline::Sample> samples;
 };
 
-Replayed run(const sim::Scenario& s, bool fit = true) {
+Replayed run(const sim::Scenario& s, bool fit = true,
+             pipeline::ForceSource force = pipeline::ForceSource::Pressure) {
   Replayed r;
   r.sim = sim::simulate(s);
   pipeline::PipelineOptions o;
   o.fit = fit;
+  o.force = force;
   o.methods = {Method::Hybrid};
   pipeline::Pipeline p(r.sim.calibration, o, &model());
   pipeline::SampleBuilder sb(r.sim.calibration);
@@ -47,6 +49,7 @@ Replayed run(const sim::Scenario& s, bool fit = true) {
     p.feed(f);
     if (auto smp = sb.feed(f)) r.samples.push_back(*smp);
   }
+  if (auto smp = sb.flush()) r.samples.push_back(*smp);
   p.finish();
   r.events = std::move(p.events());
   return r;
@@ -73,20 +76,38 @@ TEST(Simulator, DeterministicFromTheSeed) {
   EXPECT_GT(differ, 100u);
 }
 
-TEST(Simulator, RollerWithEffectsOffRecoversPeakAndSlipStiffness) {
-  const Replayed r = run(scenario("ideal_roller"));
+TEST(Simulator, RollerWithEffectsOffRecoversTheTyresParameters) {
+  // Every effect off (the wheel keeps its real inertia: without it the slip jumps past the peak
+  // within one frame). The tester's own force reading sees the falling branch while the wheel
+  // runs away to the switch-off slip, so B, C, D come back within 2 %.
+  const Replayed r = run(scenario("ideal_roller"), true, pipeline::ForceSource::Tester);
   const auto& e = only_event(r);
   EXPECT_EQ(e.event.end_reason, "switch_off_slip");
   ASSERT_EQ(e.results.size(), 1u);
   const MfParams& fit = e.results[0].params;
   const MfParams& truth = r.sim.truth;
+  EXPECT_NEAR(fit.B / truth.B, 1.0, 0.02);
+  EXPECT_NEAR(fit.C / truth.C, 1.0, 0.02);
+  EXPECT_NEAR(fit.D / truth.D, 1.0, 0.02);
+  EXPECT_NEAR(fit.E, truth.E, 0.05);  // E is near 0: absolute
+  for (double s = 0.0; s <= 0.27; s += 0.005)
+    EXPECT_NEAR(mf_force_n(fit, s), mf_force_n(truth, s), 0.01 * truth.D);
+}
+
+TEST(Simulator, ForceFromPressureOnRollersSeesOnlyUpToThePeak) {
+  // Force from pressure (the paper's way): past the peak the pedal-driven wheel runs away and
+  // gain * p includes I w' / R, so only D and the slip stiffness B C D are recovered; C and E
+  // trade off. The curve still matches the tyre up to its peak.
+  const Replayed r = run(scenario("ideal_roller"));
+  const auto& e = only_event(r);
+  ASSERT_EQ(e.results.size(), 1u);
+  const MfParams& fit = e.results[0].params;
+  const MfParams& truth = r.sim.truth;
   EXPECT_NEAR(fit.D / truth.D, 1.0, 0.02);
   EXPECT_NEAR(fit.B * fit.C * fit.D / (truth.B * truth.C * truth.D), 1.0, 0.02);  // slip stiffness
-  // The identified curve equals the tyre's up to its peak (within 2 % of D).
   const double peak_slip = mf_peak(truth, 1.0).slip_ratio;
   for (double s = 0.0; s <= peak_slip; s += 0.005)
     EXPECT_NEAR(mf_force_n(fit, s), mf_force_n(truth, s), 0.02 * truth.D) << "slip " << s;
-  EXPECT_LT(e.results[0].metrics.rmse_pct_peak, 1.0);
 }
 
 TEST(Simulator, RollerFrictionScalesD) {
