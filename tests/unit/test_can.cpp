@@ -4,6 +4,7 @@
 
 #include "core/can/candump.hpp"
 #include "core/can/layout.hpp"
+#include "core/pipeline/samples.hpp"
 #include "core/curve.hpp"
 
 using namespace brakefit;
@@ -119,6 +120,11 @@ TEST(Candump, ReplaysTheCommittedCandumpLFixture) {
   std::size_t known = 0;
   for (const auto& f : t.frames) known += decode(f.frame).has_value();
   EXPECT_EQ(known, 4u);
+  // The replay pipeline counts and ignores the frames it does not know.
+  pipeline::SampleBuilder sb(pipeline::Calibration{});
+  for (const auto& f : t.frames) sb.feed(f);
+  EXPECT_EQ(sb.stats().frames, 10u);
+  EXPECT_EQ(sb.stats().unknown_ids, 6u);
 }
 
 TEST(Candump, MalformedLinesGiveTheLineNumberOrAreCountedWhenLenient) {
