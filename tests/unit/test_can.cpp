@@ -4,8 +4,8 @@
 
 #include "core/can/candump.hpp"
 #include "core/can/layout.hpp"
-#include "core/pipeline/samples.hpp"
 #include "core/curve.hpp"
+#include "core/pipeline/samples.hpp"
 
 using namespace brakefit;
 using namespace brakefit::can;

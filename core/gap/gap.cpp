@@ -1,0 +1,415 @@
+#include "core/gap/gap.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/curve.hpp"
+#include "core/fit/lm.hpp"
+
+namespace brakefit::gap {
+
+const char* to_string(Effect e) {
+  switch (e) {
+    case Effect::RelaxationLength:
+      return "relaxation_length";
+    case Effect::TimeOffset:
+      return "time_offset";
+    case Effect::WheelInertia:
+      return "wheel_inertia";
+    case Effect::BrakeThreshold:
+      return "brake_threshold";
+    case Effect::SlipOffset:
+      return "slip_offset";
+    case Effect::LoadTransfer:
+      return "load_transfer";
+    case Effect::SpeedFriction:
+      return "speed_friction";
+  }
+  return "?";
+}
+
+EffectParam effect_param(Effect e) {
+  switch (e) {
+    case Effect::RelaxationLength:
+      return {"sigma_m", 1e-4, 2.0, 0.05};
+    case Effect::TimeOffset:
+      return {"dt_s", -0.3, 0.3, 0.0};
+    case Effect::WheelInertia:
+      return {"inertia_kgm2", 0.0, 20.0, 0.5};
+    case Effect::BrakeThreshold:
+      return {"p0_bar", -10.0, 30.0, 0.0};
+    case Effect::SlipOffset:
+      return {"slip_offset_ratio", -0.05, 0.05, 0.0};
+    case Effect::LoadTransfer:
+      return {"dfz_per_decel_s2_per_m", -0.2, 0.2, 0.0};
+    case Effect::SpeedFriction:
+      return {"lambda_mu_v", 0.0, 20.0, 0.1};
+  }
+  return {"?", 0, 0, 0};
+}
+
+namespace {
+
+constexpr double kLongVl = 16.7;  // MF 6.1 reference speed V0, m/s
+
+std::vector<double> smooth(const std::vector<double>& x, int hw) {
+  // Zero-phase: a centred moving average (symmetric, no lag), shrinking at the ends.
+  std::vector<double> y(x.size());
+  const auto n = static_cast<long>(x.size());
+  for (long i = 0; i < n; ++i) {
+    const long w = std::min<long>({hw, i, n - 1 - i});
+    double s = 0;
+    for (long k = i - w; k <= i + w; ++k) s += x[static_cast<std::size_t>(k)];
+    y[static_cast<std::size_t>(i)] = s / static_cast<double>(2 * w + 1);
+  }
+  return y;
+}
+
+std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x) {
+  std::vector<double> d(x.size(), 0.0);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const std::size_t a = i == 0 ? 0 : i - 1, b = std::min(i + 1, x.size() - 1);
+    if (t[b] > t[a]) d[i] = (x[b] - x[a]) / (t[b] - t[a]);
+  }
+  return d;
+}
+
+double interp(const std::vector<double>& t, const std::vector<double>& x, double at) {
+  if (at <= t.front()) return x.front();
+  if (at >= t.back()) return x.back();
+  const auto j = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), at) - t.begin());
+  const double u = (at - t[j - 1]) / (t[j] - t[j - 1]);
+  return x[j - 1] + u * (x[j] - x[j - 1]);
+}
+
+}  // namespace
+
+Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
+              const ConditionOptions& o) {
+  Run full;
+  full.name = name;
+  full.wheel_radius_m = c.wheel_radius_m;
+  full.brake_gain_n_per_bar = c.brake_gain_n_per_bar;
+  std::vector<double> v_wheel, pressure;
+  for (const auto& s : e.samples) {
+    if (s.v_ref_mps < 0.3) continue;
+    const double f = o.force == pipeline::ForceSource::Tester
+                         ? s.force_n
+                         : c.brake_gain_n_per_bar * s.pressure_bar;
+    if (!std::isfinite(f)) continue;
+    full.t_s.push_back(static_cast<double>(s.t_ns - e.t_start_ns) * 1e-9);
+    full.v_ref_mps.push_back(s.v_ref_mps);
+    v_wheel.push_back(s.v_wheel_mps);
+    pressure.push_back(s.pressure_bar);
+    full.force_n.push_back(f);
+  }
+  if (full.t_s.size() < 20)
+    throw InputError(fmt::format("{}: too few samples for a diagnosis", name));
+  // Noise of the force channel: robust scale of first differences (the signal is smooth at 1 kHz).
+  std::vector<double> df;
+  for (std::size_t i = 1; i < full.force_n.size(); ++i)
+    df.push_back(std::abs(full.force_n[i] - full.force_n[i - 1]));
+  std::nth_element(df.begin(), df.begin() + static_cast<long>(df.size() / 2), df.end());
+  full.noise_n = df[df.size() / 2] / 0.6745 / std::sqrt(2.0);
+  const auto vr = smooth(full.v_ref_mps, o.smooth_half_window),
+             vw = smooth(v_wheel, o.smooth_half_window);
+  full.v_ref_mps = vr;
+  for (std::size_t i = 0; i < vr.size(); ++i)
+    full.slip.push_back(std::clamp(1.0 - vw[i] / vr[i], 0.0, 1.0));
+  full.wheel_accel_mps2 = derivative(full.t_s, vw);
+  auto dref = derivative(full.t_s, vr);
+  for (double& d : dref) d = -d;
+  full.ref_decel_mps2 = dref;
+  full.pressure_rate_bar_per_s = derivative(full.t_s, smooth(pressure, o.smooth_half_window));
+  // Decimate uniformly in time. (Uniform in slip progress was tried: it over-weights the runaway
+  // after the peak, where slip is measured across only one or two frames, and the null case got
+  // worse: 147 N instead of 7 N.)
+  const std::size_t n = full.t_s.size();
+  if (n <= o.max_points) return full;
+  std::vector<std::size_t> idx;
+  for (std::size_t k = 0; k < o.max_points; ++k) idx.push_back(k * (n - 1) / (o.max_points - 1));
+  Run r;
+  r.name = full.name;
+  r.wheel_radius_m = full.wheel_radius_m;
+  r.brake_gain_n_per_bar = full.brake_gain_n_per_bar;
+  r.noise_n = full.noise_n;
+  for (std::size_t i : idx) {
+    r.t_s.push_back(full.t_s[i]);
+    r.slip.push_back(full.slip[i]);
+    r.v_ref_mps.push_back(full.v_ref_mps[i]);
+    r.force_n.push_back(full.force_n[i]);
+    r.wheel_accel_mps2.push_back(full.wheel_accel_mps2[i]);
+    r.ref_decel_mps2.push_back(full.ref_decel_mps2[i]);
+    r.pressure_rate_bar_per_s.push_back(full.pressure_rate_bar_per_s[i]);
+  }
+  return r;
+}
+
+std::vector<double> predict(const Run& r, const std::vector<double>& p,
+                            const std::vector<Effect>& effects) {
+  const std::size_t n = r.t_s.size();
+  std::vector<double> slip = r.slip;
+  std::vector<double> d_scale(n, 1.0), add(n, 0.0);
+  for (std::size_t k = 0; k < effects.size(); ++k) {
+    const double q = p[4 + k];
+    switch (effects[k]) {
+      case Effect::TimeOffset: {  // the force channel is late by dt: it shows the tyre at t - dt
+        std::vector<double> shifted(n);
+        for (std::size_t i = 0; i < n; ++i) shifted[i] = interp(r.t_s, slip, r.t_s[i] - q);
+        slip = std::move(shifted);
+        break;
+      }
+      case Effect::SlipOffset:
+        for (double& s : slip) s -= q;
+        break;
+      case Effect::RelaxationLength: {  // sigma dk'/dt + V k' = V k (implicit Euler along the run)
+        std::vector<double> lagged(n);
+        lagged[0] = slip[0];
+        for (std::size_t i = 1; i < n; ++i) {
+          const double a = (r.t_s[i] - r.t_s[i - 1]) * r.v_ref_mps[i] / std::max(q, 1e-6);
+          lagged[i] = (lagged[i - 1] + a * slip[i]) / (1 + a);
+        }
+        slip = std::move(lagged);
+        break;
+      }
+      case Effect::BrakeThreshold:  // gain p = Tb/R + gain p0
+        for (double& a : add) a += r.brake_gain_n_per_bar * q;
+        break;
+      case Effect::WheelInertia:  // I w' = F R - Tb  =>  Tb/R = F - I a_wheel / R^2
+        for (std::size_t i = 0; i < n; ++i)
+          add[i] -= q * r.wheel_accel_mps2[i] / (r.wheel_radius_m * r.wheel_radius_m);
+        break;
+      case Effect::LoadTransfer:  // Fz (and D) grow with the measured deceleration
+        for (std::size_t i = 0; i < n; ++i) d_scale[i] *= 1.0 + q * r.ref_decel_mps2[i];
+        break;
+      case Effect::SpeedFriction:  // lambda_mu* = 1 / (1 + LMUV Vs / V0), Vs = slip * V
+        for (std::size_t i = 0; i < n; ++i)
+          d_scale[i] /= 1.0 + q * std::abs(r.slip[i]) * r.v_ref_mps[i] / kLongVl;
+        break;
+    }
+  }
+  std::vector<double> f(n);
+  const MfParams base{p[0], p[1], p[2], p[3], 0, 0};
+  for (std::size_t i = 0; i < n; ++i) {
+    MfParams m = base;
+    m.D *= d_scale[i];
+    f[i] = mf_force_n(m, slip[i]) + add[i];
+  }
+  return f;
+}
+
+double Fit::bic() const {
+  const double n = static_cast<double>(points);
+  return n * std::log(std::max(ssr, 1e-300) / n) + static_cast<double>(params.size()) * std::log(n);
+}
+
+namespace {
+
+class GapProblem final : public fit::LeastSquaresProblem {
+ public:
+  GapProblem(const std::vector<const Run*>& runs, const std::vector<Effect>& effects)
+      : runs_(runs), effects_(effects) {
+    for (const Run* r : runs_) n_ += static_cast<Eigen::Index>(r->t_s.size());
+  }
+  Eigen::Index residual_count() const override { return n_; }
+  void evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& res, Eigen::MatrixXd* j) const override {
+    residuals(x, res);
+    if (!j) return;
+    Eigen::VectorXd rp(n_), rm(n_);
+    for (Eigen::Index k = 0; k < x.size(); ++k) {
+      const double h = 1e-6 * std::max(1.0, std::abs(x(k)));
+      Eigen::VectorXd xp = x, xm = x;
+      xp(k) += h;
+      xm(k) -= h;
+      residuals(xp, rp);
+      residuals(xm, rm);
+      j->col(k) = (rp - rm) / (2 * h);
+    }
+  }
+
+ private:
+  void residuals(const Eigen::VectorXd& x, Eigen::VectorXd& res) const {
+    const std::vector<double> p(x.data(), x.data() + x.size());
+    Eigen::Index o = 0;
+    for (const Run* r : runs_) {
+      const auto f = predict(*r, p, effects_);
+      for (std::size_t i = 0; i < f.size(); ++i) res(o++) = f[i] - r->force_n[i];
+    }
+  }
+  const std::vector<const Run*>& runs_;
+  const std::vector<Effect>& effects_;
+  Eigen::Index n_ = 0;
+};
+
+}  // namespace
+
+Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
+             const MfParams& start) {
+  const auto np = static_cast<Eigen::Index>(4 + effects.size());
+  double peak = 0;
+  for (const Run* r : runs)
+    for (double f : r->force_n) peak = std::max(peak, std::abs(f));
+  Eigen::VectorXd lo(np), hi(np), x0(np);
+  lo.head(4) << 0.1, 0.3, 0.0, -20.0;
+  hi.head(4) << 200.0, 3.0, 5.0 * peak, 1.0;
+  x0.head(4) << start.B, start.C, start.D, start.E;
+  for (std::size_t k = 0; k < effects.size(); ++k) {
+    const EffectParam ep = effect_param(effects[k]);
+    const auto i = static_cast<Eigen::Index>(4 + k);
+    lo(i) = ep.lo;
+    hi(i) = ep.hi;
+    x0(i) = ep.start;
+  }
+  GapProblem problem(runs, effects);
+  fit::LmOptions lm;
+  lm.max_iterations = 100;
+  const fit::LmResult r = fit::minimize(problem, x0, lo, hi, lm);
+  Fit out;
+  out.params.assign(r.x.data(), r.x.data() + r.x.size());
+  out.stderr_.assign(r.standard_errors.data(), r.standard_errors.data() + r.standard_errors.size());
+  out.ssr = r.ssr;
+  out.points = static_cast<std::size_t>(problem.residual_count());
+  return out;
+}
+
+double rmse(const Run& r, const std::vector<double>& params, const std::vector<Effect>& effects) {
+  const auto f = predict(r, params, effects);
+  double s = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) s += (f[i] - r.force_n[i]) * (f[i] - r.force_n[i]);
+  return std::sqrt(s / static_cast<double>(f.size()));
+}
+
+namespace {
+
+/// Leave-one-run-out: RMS over runs of the held-out RMSE with parameters fitted on the others.
+double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects,
+               const MfParams& start) {
+  double sq = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    std::vector<const Run*> train;
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      if (i != k) train.push_back(&runs[i]);
+    const Fit f = fit_runs(train, effects, start);
+    const double e = rmse(runs[k], f.params, effects);
+    sq += e * e;
+  }
+  return std::sqrt(sq / static_cast<double>(runs.size()));
+}
+
+}  // namespace
+
+Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Options& o) {
+  if (runs.size() < 2)
+    throw InputError(
+        "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
+        "to)");
+  Report rep;
+  std::vector<const Run*> all;
+  double noise_sq = 0;
+  for (const Run& r : runs) {
+    all.push_back(&r);
+    noise_sq += r.noise_n * r.noise_n;
+  }
+  rep.noise_n = std::sqrt(noise_sq / static_cast<double>(runs.size()));
+  rep.before = fit_runs(all, {}, start);
+  const MfParams base{
+      rep.before.params[0], rep.before.params[1], rep.before.params[2], rep.before.params[3], 0, 0};
+  rep.gap_before_rmse_n = heldout(runs, {}, base);
+
+  // Where: baseline residual by slip region, by phase, by run.
+  const double peak_slip = mf_peak(base, 1.0).slip_ratio;
+  std::vector<std::pair<std::string, double>> acc;
+  auto add = [&](const std::string& region, double r2) {
+    for (auto& [name, v] : acc)
+      if (name == region) return void(v += r2);
+    acc.emplace_back(region, r2);
+  };
+  std::vector<std::pair<std::string, std::size_t>> counts;
+  auto count = [&](const std::string& region) {
+    for (auto& [name, v] : counts)
+      if (name == region) return void(++v);
+    counts.emplace_back(region, 1);
+  };
+  double total = 0;
+  for (const Run& r : runs) {
+    const auto f = predict(r, rep.before.params, {});
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const double r2 = (r.force_n[i] - f[i]) * (r.force_n[i] - f[i]);
+      total += r2;
+      const std::string slip_region = r.slip[i] < 0.5 * peak_slip   ? "linear"
+                                      : r.slip[i] < 1.5 * peak_slip ? "near_peak"
+                                                                    : "after_peak";
+      const std::string phase = r.pressure_rate_bar_per_s[i] >= 0 ? "apply" : "release";
+      for (const std::string& reg : {slip_region, "phase:" + phase, "run:" + r.name}) {
+        add(reg, r2);
+        count(reg);
+      }
+    }
+  }
+  for (std::size_t k = 0; k < acc.size(); ++k)
+    rep.where.push_back({acc[k].first,
+                         std::sqrt(acc[k].second / static_cast<double>(counts[k].second)),
+                         total > 0 ? acc[k].second / total : 0.0});
+
+  // Which: forward selection on held-out error.
+  std::vector<Effect> chosen;
+  double current_heldout = rep.gap_before_rmse_n;
+  Fit current_fit = rep.before;
+  for (std::size_t round = 0; round < o.max_effects; ++round) {
+    std::vector<EffectScore> scores;
+    std::vector<Fit> fits;
+    for (Effect e : kAllEffects) {
+      if (std::find(chosen.begin(), chosen.end(), e) != chosen.end()) continue;
+      std::vector<Effect> model = chosen;
+      model.push_back(e);
+      EffectScore s;
+      s.effect = e;
+      s.heldout_rmse_before_n = current_heldout;
+      s.heldout_rmse_after_n = heldout(runs, model, base);
+      s.gain = 1.0 - s.heldout_rmse_after_n / std::max(current_heldout, 1e-12);
+      Fit f = fit_runs(all, model, base);
+      s.delta_bic = f.bic() - current_fit.bic();
+      s.params.emplace_back(effect_param(e).name, f.params.back());
+      scores.push_back(s);
+      fits.push_back(std::move(f));
+    }
+    if (scores.empty()) break;
+    std::vector<std::size_t> order(scores.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return scores[a].gain > scores[b].gain; });
+    EffectScore& best = scores[order[0]];
+    best.accepted = best.gain >= o.gate_gain && best.delta_bic <= -o.bic_margin;
+    if (order.size() > 1) {
+      const EffectScore& second = scores[order[1]];
+      const bool both_pass = second.gain >= o.gate_gain && second.delta_bic <= -o.bic_margin;
+      if (best.accepted && both_pass && best.gain - second.gain < o.separability * best.gain)
+        rep.notes.push_back(
+            fmt::format("the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); "
+                        "runs at other speeds or ramp rates would",
+                        to_string(best.effect), to_string(second.effect), best.gain, second.gain));
+    }
+    if (round == 0) rep.effects = scores;
+    if (!best.accepted) break;
+    if (round > 0) rep.effects.push_back(best);
+    chosen.push_back(best.effect);
+    current_heldout = best.heldout_rmse_after_n;
+    current_fit = fits[order[0]];
+  }
+  rep.accepted = chosen;
+  rep.after = current_fit;
+  rep.gap_after_rmse_n = current_heldout;
+  for (Effect e : chosen) rep.verdict.push_back(to_string(e));
+  const bool gap_left = rep.gap_after_rmse_n > o.noise_factor * rep.noise_n;
+  if (chosen.empty()) {
+    rep.verdict.push_back(gap_left ? "unexplained" : "none");
+  } else if (gap_left) {
+    rep.verdict.push_back("unexplained");
+  }
+  return rep;
+}
+
+}  // namespace brakefit::gap

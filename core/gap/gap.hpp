@@ -1,0 +1,111 @@
+#pragma once
+// Sim-to-real gap diagnosis (model vs measurement): where the 4-parameter formula and the measured
+// runs disagree, which unmodelled effect explains it, and how far the gap shrinks on withheld runs.
+// Each candidate effect is the equation of shared/docs/physics.md §3 added to the Magic Formula,
+// fitted jointly with B, C, D, E over all runs; candidates are ranked by leave-one-run-out error
+// and accepted only past a gain gate and a BIC margin.
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/magic_formula.hpp"
+#include "core/pipeline/events.hpp"
+
+namespace brakefit::gap {
+
+enum class Effect {
+  RelaxationLength,
+  TimeOffset,
+  WheelInertia,
+  BrakeThreshold,
+  SlipOffset,
+  LoadTransfer,
+  SpeedFriction
+};
+inline constexpr std::array<Effect, 7> kAllEffects = {
+    Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia, Effect::BrakeThreshold,
+    Effect::SlipOffset,       Effect::LoadTransfer, Effect::SpeedFriction};
+const char* to_string(Effect e);
+
+struct EffectParam {
+  const char* name;  ///< SI name, e.g. "sigma_m"
+  double lo, hi, start;
+};
+EffectParam effect_param(Effect e);
+
+/// One conditioned run (a brake event), decimated for fitting.
+struct Run {
+  std::string name;
+  double wheel_radius_m = 0.3;
+  double brake_gain_n_per_bar = 1.0;
+  std::vector<double> t_s, slip, v_ref_mps, force_n;
+  std::vector<double> wheel_accel_mps2;  ///< d v_wheel / dt (negative when the wheel slows)
+  std::vector<double> ref_decel_mps2;    ///< -d v_ref / dt
+  std::vector<double> pressure_rate_bar_per_s;
+  double noise_n = 0.0;  ///< measurement noise of the force, estimated before decimation
+};
+
+struct ConditionOptions {
+  int smooth_half_window = 10;   ///< zero-phase centred moving average of slip and speeds (samples)
+  std::size_t max_points = 400;  ///< decimation for fitting
+  pipeline::ForceSource force = pipeline::ForceSource::Pressure;
+};
+Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
+              const ConditionOptions& o);
+
+/// Predicted measured force for parameters {B, C, D, E, one per effect}.
+std::vector<double> predict(const Run& r, const std::vector<double>& params,
+                            const std::vector<Effect>& effects);
+
+struct Fit {
+  std::vector<double> params;  ///< B, C, D, E, then the effects' parameters
+  std::vector<double> stderr_;
+  double ssr = 0.0;
+  std::size_t points = 0;
+  double bic() const;
+};
+Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
+             const MfParams& start);
+double rmse(const Run& r, const std::vector<double>& params, const std::vector<Effect>& effects);
+
+struct Options {
+  double gate_gain = 0.10;      ///< minimum held-out gain (1 - after/before) to accept an effect
+  double bic_margin = 10.0;     ///< minimum BIC decrease
+  double noise_factor = 1.5;    ///< held-out RMSE above noise_factor x noise = a gap is left
+  std::size_t max_effects = 3;  ///< forward selection depth
+  double separability =
+      0.15;  ///< two candidates whose gains differ less than this are "not separable"
+};
+
+struct EffectScore {
+  Effect effect{};
+  std::vector<std::pair<std::string, double>> params;
+  double heldout_rmse_before_n = 0.0;
+  double heldout_rmse_after_n = 0.0;
+  double gain = 0.0;
+  double delta_bic = 0.0;
+  bool accepted = false;
+};
+
+struct WhereRow {
+  std::string region;
+  double rms_residual_n = 0.0;
+  double share = 0.0;  ///< of the total squared residual
+};
+
+struct Report {
+  std::vector<std::string> verdict;
+  std::vector<EffectScore> effects;  ///< first round: every candidate alone on the baseline
+  std::vector<Effect> accepted;
+  std::vector<WhereRow> where;
+  double gap_before_rmse_n = 0.0;  ///< held-out (leave one run out)
+  double gap_after_rmse_n = 0.0;
+  double noise_n = 0.0;
+  Fit before, after;
+  std::vector<std::string> notes;
+};
+
+/// Needs at least two runs (leave-one-run-out). Throws InputError otherwise.
+Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Options& o = {});
+
+}  // namespace brakefit::gap
