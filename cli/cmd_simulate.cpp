@@ -12,12 +12,6 @@
 
 namespace brakefit::cli {
 
-/// "dir/name.log" -> "dir/name" (the sidecars are <stem>.bench.toml and <stem>.truth.json).
-std::string recording_stem(const std::string& log_path) {
-  const std::filesystem::path p(log_path);
-  return (p.parent_path() / p.stem()).string();
-}
-
 void add_simulate_command(CLI::App& app) {
   struct Opts {
     std::string scenario, out, ramp;

@@ -12,7 +12,5 @@ void add_simulate_command(CLI::App& app);
 void add_replay_command(CLI::App& app);
 void add_export_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
-/// "dir/name.log" -> "dir/name".
-std::string recording_stem(const std::string& log_path);
 
 }  // namespace brakefit::cli

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -54,6 +55,11 @@ Model load_model(const std::string& path) {
   } catch (const InputError& e) {
     throw ExitError(kExitDataError, e.what());
   }
+}
+
+std::string recording_stem(const std::string& log_path) {
+  const std::filesystem::path p(log_path);
+  return (p.parent_path() / p.stem()).string();
 }
 
 void log_progress(const std::string& stage, std::size_t done, std::size_t total, double loss) {

@@ -24,6 +24,9 @@ void write_file(const std::string& path, const std::string& content);
 /// The model given, else $BRAKEFIT_MODEL, else the default model shipped in data/models/.
 std::string resolve_model_path(const std::string& given);
 Model load_model(const std::string& path);
+/// "dir/name.log" -> "dir/name" (a recording's sidecars are <stem>.bench.toml and
+/// <stem>.truth.json).
+std::string recording_stem(const std::string& log_path);
 /// Logs a stage's progress at most every 10 %.
 void log_progress(const std::string& stage, std::size_t done, std::size_t total, double loss);
 

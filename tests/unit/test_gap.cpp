@@ -6,16 +6,12 @@
 #include "core/gap/gap.hpp"
 #include "core/pipeline/pipeline.hpp"
 #include "sim/simulator.hpp"
-#include "tests/unit/test_util.hpp"
+#include "tests/unit/sim_test_util.hpp"
 
 using namespace brakefit;
+using brakefit::test::scenario;
 
 namespace {
-
-sim::Scenario scenario(const std::string& name) {
-  const std::string path = brakefit::test::source_path("sim/scenarios/" + name + ".toml");
-  return sim::parse_scenario(brakefit::test::read_text(path), path);
-}
 
 /// Three runs at different pedal ramps, the same effects.
 std::vector<gap::Run> runs(sim::Scenario s, MfParams* truth = nullptr) {

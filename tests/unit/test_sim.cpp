@@ -2,7 +2,7 @@
 // effects off, and each effect's signature (shared/docs/physics.md §3).
 #include <gtest/gtest.h>
 
-#include "tests/unit/test_util.hpp"
+#include "tests/unit/sim_test_util.hpp"
 
 #include <cmath>
 
@@ -13,13 +13,9 @@
 #include "sim/simulator.hpp"
 
 using namespace brakefit;
+using brakefit::test::scenario;
 
 namespace {
-
-sim::Scenario scenario(const std::string& name) {
-  const std::string path = brakefit::test::source_path("sim/scenarios/" + name + ".toml");
-  return sim::parse_scenario(brakefit::test::read_text(path), path);
-}
 
 const Model& model() {
   static const Model m = [] {
