@@ -10,7 +10,7 @@
 #include "brakefit/version.hpp"
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
-#include "cli/json_out.hpp"
+#include "core/event_json.hpp"
 #include "cli/recording.hpp"
 #include "core/plot/svg.hpp"
 

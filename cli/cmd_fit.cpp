@@ -8,7 +8,7 @@
 #include "brakefit/version.hpp"
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
-#include "cli/json_out.hpp"
+#include "core/event_json.hpp"
 #include "core/curve_csv.hpp"
 #include "core/plot/charts.hpp"
 

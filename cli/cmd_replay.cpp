@@ -7,7 +7,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
-#include "cli/json_out.hpp"
+#include "core/event_json.hpp"
 #include "cli/recording.hpp"
 #include "core/pipeline/event_csv.hpp"
 #include "core/plot/charts.hpp"

@@ -10,7 +10,12 @@ Calibration parse_calibration(std::string_view text, const std::string& source) 
   rd.check_keys(root, "", {"bench"});
   const toml::table* b = rd.table(root, "", "bench");
   if (!b) rd.fail("bench", "missing [bench] table");
-  const std::string p = "bench.";
+  return calibration_from_table(*b, rd, "bench.");
+}
+
+Calibration calibration_from_table(const toml::table& bt, const TomlReader& rd,
+                                   const std::string& p) {
+  const toml::table* b = &bt;
   rd.check_keys(*b, p,
                 {"kind", "roller_radius_m", "wheel_radius_m", "fifth_wheel_radius_m", "roller_ppr",
                  "wheel_ppr", "fifth_wheel_ppr", "brake_gain_n_per_bar", "wheel_load_n",

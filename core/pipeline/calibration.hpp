@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "core/can/layout.hpp"
+#include "core/toml_reader.hpp"
 
 namespace brakefit::pipeline {
 
@@ -25,6 +26,9 @@ struct Calibration {
 };
 
 Calibration parse_calibration(std::string_view toml_text, const std::string& source);
+/// The `[bench]` table of a larger file (the daemon's config); keys are named "<prefix>key".
+Calibration calibration_from_table(const toml::table& bench, const TomlReader& rd,
+                                   const std::string& prefix);
 std::string format_calibration(const Calibration& c);
 
 }  // namespace brakefit::pipeline

@@ -58,6 +58,11 @@ std::optional<Event> EventDetector::finish() {
   return close("end_of_data", true);
 }
 
+std::optional<Event> EventDetector::abort(const std::string& reason) {
+  if (!cur_) return std::nullopt;
+  return close(reason, true);
+}
+
 Curve event_curve(const Event& e, const Calibration& c, const EventSettings& s,
                   ForceSource source) {
   Curve curve;

@@ -46,6 +46,12 @@ class EventDetector {
   std::optional<Event> feed(const Sample& s);
   /// End of data: a running event is returned, flagged aborted.
   std::optional<Event> finish();
+  /// Ends a running event now, flagged aborted (sensor timeout seen by the daemon's clock,
+  /// operator abort, shutdown).
+  std::optional<Event> abort(const std::string& reason);
+  /// Allows a new event without waiting for the pedal release (operator command).
+  void arm() { armed_ = true; }
+  bool active() const { return cur_.has_value(); }
 
  private:
   std::optional<Event> close(const std::string& reason, bool aborted);

@@ -10,12 +10,17 @@ void Pipeline::feed(const can::LoggedFrame& f) {
 }
 
 void Pipeline::feed(const Sample& s) {
+  last_ = s;
   if (auto e = detector_.feed(s)) handle(std::move(*e));
 }
 
 void Pipeline::finish() {
   if (auto s = builder_.flush()) feed(*s);
   if (auto e = detector_.finish()) handle(std::move(*e));
+}
+
+void Pipeline::abort(const std::string& reason) {
+  if (auto e = detector_.abort(reason)) handle(std::move(*e));
 }
 
 void Pipeline::handle(Event e) {

@@ -2,6 +2,9 @@
 // The replay/live pipeline: frames (or samples) in, finished and fitted brake events out. The same
 // code runs in `brakefit replay` and, later, inside brakefitd.
 #include <functional>
+#include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "core/curve_csv.hpp"
@@ -29,7 +32,14 @@ class Pipeline {
   void feed(const can::LoggedFrame& f);
   void feed(const Sample& s);
   void finish();
+  /// Ends a running event, flagged aborted with this end reason.
+  void abort(const std::string& reason);
+  void arm() { detector_.arm(); }
+  bool event_active() const { return detector_.active(); }
+  const std::optional<Sample>& last_sample() const { return last_; }
   std::vector<EventResult>& events() { return events_; }
+  /// Hands over the finished events (the daemon drains them after every frame).
+  std::vector<EventResult> take_events() { return std::exchange(events_, {}); }
   const SampleStats& sample_stats() const { return builder_.stats(); }
 
  private:
@@ -40,6 +50,7 @@ class Pipeline {
   SampleBuilder builder_;
   EventDetector detector_;
   std::vector<EventResult> events_;
+  std::optional<Sample> last_;
 };
 
 }  // namespace brakefit::pipeline

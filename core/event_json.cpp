@@ -1,8 +1,8 @@
-#include "cli/json_out.hpp"
+#include "core/event_json.hpp"
 
 #include "brakefit/version.hpp"
 
-namespace brakefit::cli {
+namespace brakefit {
 
 nlohmann::ordered_json num(double v) {
   return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
@@ -56,4 +56,4 @@ nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::str
   return j;
 }
 
-}  // namespace brakefit::cli
+}  // namespace brakefit

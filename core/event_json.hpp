@@ -5,7 +5,7 @@
 #include "core/identify.hpp"
 #include "core/pipeline/pipeline.hpp"
 
-namespace brakefit::cli {
+namespace brakefit {
 
 nlohmann::ordered_json num(double v);
 /// One entry of "results": method, B, C, D, E, metrics, stderr or null.
@@ -14,4 +14,4 @@ nlohmann::ordered_json result_json(const MethodResult& r);
 nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::string& file,
                                   const Model* model);
 
-}  // namespace brakefit::cli
+}  // namespace brakefit

@@ -1,0 +1,65 @@
+#pragma once
+// brakefitd's configuration (/etc/brakefit/brakefitd.toml): validated strictly on start and on
+// SIGHUP; an unknown key, a wrong type or a value out of range names the key (exit 78).
+#include <string>
+#include <vector>
+
+#include "core/identify.hpp"
+#include "core/pipeline/calibration.hpp"
+#include "core/pipeline/pipeline.hpp"
+#include "drivers/gpio.hpp"
+#include "drivers/modbus_rtu.hpp"
+
+namespace brakefit::daemon {
+
+enum class SourceKind { Replay, SocketCan, Gpio };
+
+struct ModbusTcpConfig {
+  std::string address = "0.0.0.0";
+  int port = 1502;
+  int max_clients = 128;
+  bool writable = false;                   ///< command holding registers accept writes
+  std::vector<std::string> write_allow{};  ///< client IPv4 addresses allowed to write
+  double idle_timeout_s = 60;              ///< an idle (or trickling) client is dropped after this
+};
+
+struct StoreConfig {
+  std::string path = "/var/lib/brakefit/events.db";
+  double retention_days = 365;
+  int max_events = 100000;
+  double min_free_mb = 64;  ///< below this, raw samples stop being stored (results are kept)
+  bool store_samples = true;
+};
+
+struct RecordConfig {
+  bool enabled = true;
+  std::string dir = "/var/lib/brakefit/recordings";
+  double max_mb = 64;
+  double max_age_s = 3600;
+  int keep_files = 48;
+};
+
+struct Config {
+  std::string source_file;  ///< the config file itself (errors name it)
+  std::string log_level = "info";
+  std::string model_path;  ///< empty: no model (LM only)
+  double sensor_timeout_s = 0.5;
+  std::string stats_file;  ///< written on exit: counters and publish latencies (bench)
+  SourceKind kind = SourceKind::Replay;
+  std::string replay_file;
+  double replay_speed = 1.0;  ///< 0: as fast as possible
+  bool exit_at_end = false;
+  std::string can_interface = "can0";
+  drivers::GpioConfig gpio;
+  drivers::ModbusRtuConfig rtu;
+  pipeline::Calibration calibration;
+  pipeline::PipelineOptions pipeline;
+  ModbusTcpConfig modbus_tcp;
+  StoreConfig store;
+  RecordConfig record;
+};
+
+/// Throws InputError "FILE: key 'a.b': ..." on any invalid content.
+Config parse_config(std::string_view text, const std::string& source);
+
+}  // namespace brakefit::daemon

@@ -1,0 +1,427 @@
+#include "daemon/daemon.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+#include <systemd/sd-daemon.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "brakefit/version.hpp"
+
+#include "core/event_json.hpp"
+#include "core/model_io.hpp"
+#include "drivers/socketcan.hpp"
+
+namespace brakefit::daemon {
+
+namespace {
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::int64_t unix_now() {
+  return static_cast<std::int64_t>(std::time(nullptr));
+}
+
+int channel_of(std::uint32_t id) {
+  switch (id) {
+    case can::kIdRollerEncoder:
+    case can::kIdFifthWheelEncoder:
+      return 0;
+    case can::kIdWheelEncoder:
+      return 1;
+    case can::kIdBrakePressure:
+      return 2;
+    default:
+      return -1;
+  }
+}
+
+std::uint32_t hash_prefix(const std::string& hash) {
+  const auto colon = hash.find(':');
+  const std::string hex = hash.substr(colon == std::string::npos ? 0 : colon + 1, 8);
+  try {
+    return static_cast<std::uint32_t>(std::stoul(hex, nullptr, 16));
+  } catch (...) {
+    return 0;
+  }
+}
+
+void set_log_level(const std::string& l) {
+  spdlog::set_level(spdlog::level::from_str(l));
+}
+
+std::vector<std::uint32_t> layout_ids() {
+  std::vector<std::uint32_t> ids;
+  for (const auto& m : can::layout()) ids.push_back(m.id);
+  return ids;
+}
+
+}  // namespace
+
+Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
+    : config_path_(std::move(config_path)), cfg_(std::move(cfg)), sig_(sig) {
+  set_log_level(cfg_.log_level);
+  open_model();
+  try {
+    store_ = std::make_unique<EventStore>(cfg_.store, false);
+  } catch (const std::exception& e) {
+    throw DaemonError(kExitCantCreate, e.what());
+  }
+  try {
+    server_ = std::make_unique<ModbusServer>(cfg_.modbus_tcp);
+  } catch (const std::exception& e) {
+    throw DaemonError(kExitOsErr, e.what());
+  }
+  try {
+    switch (cfg_.kind) {
+      case SourceKind::Replay:
+        source_ = std::make_unique<drivers::ReplaySource>(cfg_.replay_file, cfg_.replay_speed);
+        break;
+      case SourceKind::SocketCan:
+        source_ = std::make_unique<drivers::SocketCanSource>(
+            drivers::CanSocket::open(cfg_.can_interface, layout_ids()), cfg_.can_interface);
+        break;
+      case SourceKind::Gpio:
+        source_ = std::make_unique<drivers::LocalLiveSource>(
+            cfg_.gpio, drivers::open_gpiod_edge_source(cfg_.gpio), cfg_.rtu);
+        break;
+    }
+  } catch (const InputError& e) {
+    throw DaemonError(kExitUnavailable, fmt::format("source: {}", e.what()));
+  } catch (const drivers::SourceError& e) {
+    throw DaemonError(kExitUnavailable, e.what());
+  }
+  if (cfg_.record.enabled && cfg_.kind != SourceKind::Replay) {
+    try {
+      recorder_ = std::make_unique<drivers::CandumpRecorder>(
+          cfg_.record.dir, static_cast<std::uint64_t>(cfg_.record.max_mb * 1048576.0),
+          cfg_.record.max_age_s, cfg_.record.keep_files);
+    } catch (const std::exception& e) {
+      throw DaemonError(kExitCantCreate, e.what());
+    }
+  }
+  pipeline_ = std::make_unique<pipeline::Pipeline>(cfg_.calibration, cfg_.pipeline,
+                                                   model_ ? &*model_ : nullptr);
+  server_->start();
+  spdlog::info("brakefitd: source {}, Modbus TCP on {}:{} ({}), store {}", source_->describe(),
+               cfg_.modbus_tcp.address, server_->port(),
+               cfg_.modbus_tcp.writable ? "commands writable" : "read-only", cfg_.store.path);
+}
+
+Daemon::~Daemon() {
+  if (server_) server_->stop();
+}
+
+void Daemon::open_model() {
+  model_.reset();
+  if (cfg_.model_path.empty()) {
+    spdlog::warn("no model configured: only the lm method runs");
+    return;
+  }
+  try {
+    model_ = deserialize_model(read_text(cfg_.model_path), cfg_.model_path);
+  } catch (const std::exception& e) {
+    throw DaemonError(kExitConfig, fmt::format("{} (key 'daemon.model')", e.what()));
+  }
+}
+
+bool Daemon::channel_missing(int ch, Clock::time_point now) const {
+  const auto timeout = std::chrono::duration<double>(cfg_.sensor_timeout_s);
+  const auto last = seen_[static_cast<std::size_t>(ch)].value_or(start_);
+  return now - last > timeout;
+}
+
+std::uint16_t Daemon::status_flags(Clock::time_point now) const {
+  std::uint16_t f = kStatusRunning;
+  if (source_finished_) f |= kStatusSourceFinished;
+  if (!source_finished_) {
+    if (channel_missing(0, now)) f |= kStatusRefEncoderMissing;
+    if (channel_missing(1, now)) f |= kStatusWheelEncoderMissing;
+    if (channel_missing(2, now)) f |= kStatusPressureMissing;
+  }
+  if (pipeline_->event_active()) f |= kStatusEventActive;
+  if (store_->degraded()) f |= kStatusStoreDegraded;
+  if (store_error_) f |= kStatusStoreError;
+  if (recorder_error_) f |= kStatusRecorderError;
+  if (cfg_.modbus_tcp.writable) f |= kStatusWritable;
+  return f;
+}
+
+void Daemon::post_status(Clock::time_point now) {
+  RegisterWrites w;
+  auto& c = source_->counters();
+  const auto& st = pipeline_->sample_stats();
+  w.u16("status_flags", status_flags(now));
+  w.u32("uptime_s", static_cast<std::uint32_t>(
+                        std::chrono::duration_cast<std::chrono::seconds>(now - start_).count()));
+  w.u32("frames", static_cast<std::uint32_t>(c.frames.load()));
+  w.u32("events_finished", static_cast<std::uint32_t>(events_finished_));
+  w.u32("events_flagged", static_cast<std::uint32_t>(events_flagged_));
+  w.u32("illegal_transitions", static_cast<std::uint32_t>(c.illegal_transitions.load()));
+  w.u32("rtu_timeouts", static_cast<std::uint32_t>(c.rtu_timeouts.load()));
+  w.u32("rtu_reconnects", static_cast<std::uint32_t>(c.rtu_reconnects.load()));
+  w.u32("counter_gaps", static_cast<std::uint32_t>(st.counter_gaps));
+  w.u32("unknown_ids", static_cast<std::uint32_t>(st.unknown_ids));
+  w.u32("queue_drops", static_cast<std::uint32_t>(c.queue_drops.load()));
+  const double nan = std::nan("");
+  const auto& s = pipeline_->last_sample();
+  w.f32("v_ref_mps", s ? s->v_ref_mps : nan);
+  w.f32("v_wheel_mps", s ? s->v_wheel_mps : nan);
+  w.f32("slip_ratio", s ? pipeline::slip_ratio(*s) : nan);
+  w.f32("pressure_bar", s ? s->pressure_bar : nan);
+  w.f32("force_n", s ? s->force_n : nan);
+  server_->post(std::move(w));
+}
+
+void Daemon::notify_status() {
+  std::vector<std::string> missing;
+  const auto f = status_flags(Clock::now());
+  if (f & kStatusRefEncoderMissing) missing.push_back("reference encoder");
+  if (f & kStatusWheelEncoderMissing) missing.push_back("wheel encoder");
+  if (f & kStatusPressureMissing) missing.push_back("pressure");
+  std::string s =
+      fmt::format("{} events; {}; sensors {}{}{}", events_finished_, source_->describe(),
+                  missing.empty() ? "ok" : fmt::format("missing: {}", fmt::join(missing, ", ")),
+                  store_->degraded() ? "; store degraded (samples not stored)" : "",
+                  source_finished_ ? "; replay finished" : "");
+  if (s == last_status_) return;
+  last_status_ = s;
+  sd_notify(0, ("STATUS=" + s).c_str());
+}
+
+void Daemon::publish_finished(Clock::time_point closed) {
+  for (auto& er : pipeline_->take_events()) {
+    const Model* model = model_ ? &*model_ : nullptr;
+    auto doc = event_json(er, source_->describe(), model);
+    doc["vehicle_id"] = vehicle_id_;
+    const std::string hash = model ? model->hash : "";
+    // 1. durable first
+    const auto id = store_->commit(er, doc.dump(), pipeline::format_calibration(cfg_.calibration),
+                                   vehicle_id_, source_->describe(), hash, unix_now());
+    if (!id) {
+      store_error_ = true;
+      spdlog::error("{}", store_->error());
+    }
+    // 2. then published: seq_begin first, the body, seq last
+    std::uint16_t flags = 0;
+    for (const auto& f : er.event.flags) {
+      if (f == "too_short") flags |= kFlagTooShort;
+      if (f == "aborted") flags |= kFlagAborted;
+      if (f == "sensor_fault") flags |= kFlagSensorFault;
+    }
+    if (er.results.empty()) flags |= kFlagNotFitted;
+    if (id) {
+      if (auto stored = store_->get(*id); stored && !stored->samples_stored)
+        flags |= kFlagSamplesNotStored;
+    }
+    ++seq_;
+    RegisterWrites w;
+    w.u16("event.seq_begin", seq_);
+    w.u32("event.id", static_cast<std::uint32_t>(id.value_or(0)));
+    w.u16("event.bench", static_cast<std::uint16_t>(er.event.bench));
+    w.u16("event.flags", flags);
+    w.u16("event.end_reason", end_reason_code(er.event.end_reason));
+    w.u32("event.duration_ms",
+          static_cast<std::uint32_t>((er.event.t_end_ns - er.event.t_start_ns) / 1'000'000));
+    w.u16("event.points",
+          static_cast<std::uint16_t>(std::min<std::size_t>(er.curve.size(), 65535)));
+    double peak_force = std::nan("");
+    for (double fn : er.curve.force_n)
+      peak_force = std::isnan(peak_force) ? fn : std::max(peak_force, fn);
+    w.f32("event.peak_force_n", peak_force);
+    w.f32("event.peak_slip_ratio", er.curve.size() ? er.curve.max_slip_ratio() : std::nan(""));
+    w.u32("event.model_hash", hash_prefix(hash));
+    w.u32("event.t_end_unix_s", static_cast<std::uint32_t>(er.event.t_end_ns / 1'000'000'000));
+    const char* fields[6] = {"B", "C", "D", "E", "mape_pct", "rmse_n"};
+    for (const char* m : kMethodBlocks) {
+      const MethodResult* r = nullptr;
+      for (const auto& x : er.results)
+        if (to_string(x.method) == std::string(m)) r = &x;
+      const double v[6] = {r ? r->params.B : NAN,         r ? r->params.C : NAN,
+                           r ? r->params.D : NAN,         r ? r->params.E : NAN,
+                           r ? r->metrics.mape_pct : NAN, r ? r->metrics.rmse_n : NAN};
+      for (int i = 0; i < 6; ++i) w.f32(fmt::format("event.{}.{}", m, fields[i]).c_str(), v[i]);
+    }
+    w.u16("event.seq", seq_);
+    server_->post(std::move(w), closed);
+    ++events_finished_;
+    if (!er.event.flags.empty()) ++events_flagged_;
+    const MethodResult* best = er.results.empty() ? nullptr : &er.results.back();
+    spdlog::info(
+        "event {} ({}): {} points, ended by {}{}{}", id.value_or(0), can::to_string(er.event.bench),
+        er.curve.size(), er.event.end_reason,
+        er.event.flags.empty() ? "" : fmt::format(" [{}]", fmt::join(er.event.flags, ",")),
+        best ? fmt::format(", {} B {:.3f} C {:.4f} D {:.1f} E {:.4f}", to_string(best->method),
+                           best->params.B, best->params.C, best->params.D, best->params.E)
+             : "");
+  }
+}
+
+void Daemon::reload() {
+  sd_notify(0, "RELOADING=1");
+  spdlog::info("reloading {}", config_path_);
+  try {
+    Config next = parse_config(read_text(config_path_), config_path_);
+    if (next.kind != cfg_.kind || next.replay_file != cfg_.replay_file ||
+        next.can_interface != cfg_.can_interface || next.modbus_tcp.port != cfg_.modbus_tcp.port ||
+        next.modbus_tcp.address != cfg_.modbus_tcp.address || next.store.path != cfg_.store.path)
+      spdlog::warn(
+          "reload: changes to [source], the Modbus address/port or the store path need a restart");
+    next.kind = cfg_.kind;
+    next.replay_file = cfg_.replay_file;
+    next.can_interface = cfg_.can_interface;
+    next.modbus_tcp.port = cfg_.modbus_tcp.port;
+    next.modbus_tcp.address = cfg_.modbus_tcp.address;
+    next.store.path = cfg_.store.path;
+    const bool model_changed = next.model_path != cfg_.model_path;
+    cfg_ = std::move(next);
+    set_log_level(cfg_.log_level);
+    if (model_changed) open_model();
+    server_->set_write_policy(cfg_.modbus_tcp.writable, cfg_.modbus_tcp.write_allow);
+    pipeline_ = std::make_unique<pipeline::Pipeline>(cfg_.calibration, cfg_.pipeline,
+                                                     model_ ? &*model_ : nullptr);
+    spdlog::info("reloaded {}", config_path_);
+  } catch (const std::exception& e) {
+    spdlog::error("reload failed, keeping the running configuration: {}", e.what());
+  }
+  last_status_.clear();
+  sd_notify(0, "READY=1");
+  notify_status();
+}
+
+int Daemon::run() {
+  start_ = Clock::now();
+  std::uint64_t watchdog_us = 0;
+  if (sd_watchdog_enabled(0, &watchdog_us) <= 0) watchdog_us = 0;
+  sd_notify(0, "READY=1");
+  notify_status();
+  const bool paced = cfg_.kind != SourceKind::Replay || cfg_.replay_speed > 0;
+  const double wall_timeout_s =
+      cfg_.sensor_timeout_s /
+      (cfg_.kind == SourceKind::Replay ? std::max(1.0, cfg_.replay_speed) : 1.0);
+  auto last_post = Clock::time_point{}, last_ping = Clock::now(), last_notify = Clock::now(),
+       last_retention = Clock::time_point{};
+  while (!sig_.stop) {
+    if (sig_.reload.exchange(false)) reload_pending_ = true;
+    if (reload_pending_ && !pipeline_->event_active()) {
+      reload_pending_ = false;
+      reload();
+    }
+    if (auto f = source_->next(10)) {
+      const auto now = Clock::now();
+      if (recorder_ && !recorder_->write(*f)) recorder_error_ = true;
+      const int ch = channel_of(f->frame.id);
+      if (ch >= 0) seen_[static_cast<std::size_t>(ch)] = now;
+      pipeline_->feed(*f);
+      publish_finished(now);
+    } else if (source_->finished() && !source_finished_) {
+      source_finished_ = true;
+      pipeline_->finish();
+      publish_finished(Clock::now());
+      spdlog::info("replay finished: {} events", events_finished_);
+      if (cfg_.exit_at_end) break;
+    }
+    const auto now = Clock::now();
+    if (paced && pipeline_->event_active()) {
+      for (int ch = 0; ch < 3; ++ch) {
+        const auto last = seen_[static_cast<std::size_t>(ch)].value_or(start_);
+        if (std::chrono::duration<double>(now - last).count() > wall_timeout_s) {
+          spdlog::warn("sensor timeout during an event ({} silent): event aborted",
+                       ch == 0   ? "reference encoder"
+                       : ch == 1 ? "wheel encoder"
+                                 : "pressure");
+          pipeline_->abort("sensor_timeout");
+          publish_finished(now);
+          break;
+        }
+      }
+    }
+    for (const auto& cmd : server_->take_commands()) {
+      if (cmd.vehicle_id) {
+        vehicle_id_ = *cmd.vehicle_id;
+        spdlog::info("vehicle id set to '{}'", vehicle_id_);
+      }
+      if (cmd.command == kCmdArm) {
+        spdlog::info("command: arm");
+        pipeline_->arm();
+      } else if (cmd.command == kCmdAbort) {
+        spdlog::info("command: abort");
+        pipeline_->abort("operator_abort");
+        publish_finished(now);
+      } else if (cmd.command != kCmdNone) {
+        spdlog::warn("unknown command {}", cmd.command);
+      }
+    }
+    if (now - last_post > std::chrono::milliseconds(50)) {
+      post_status(now);
+      last_post = now;
+    }
+    if (now - last_notify > std::chrono::seconds(1)) {
+      notify_status();
+      if (recorder_) recorder_->flush();
+      last_notify = now;
+    }
+    if (now - last_retention > std::chrono::minutes(10)) {
+      const int n = store_->apply_retention(unix_now());
+      if (n > 0) spdlog::info("retention: {} old events deleted", n);
+      last_retention = now;
+    }
+    // The loop has serviced its input (or its timeout): the watchdog may be fed.
+    if (watchdog_us && now - last_ping > std::chrono::microseconds(watchdog_us / 4)) {
+      sd_notify(0, "WATCHDOG=1");
+      last_ping = now;
+    }
+  }
+  sd_notify(0, "STOPPING=1");
+  if (pipeline_->event_active()) {
+    pipeline_->abort("shutdown");
+    publish_finished(Clock::now());
+  }
+  if (recorder_) recorder_->flush();
+  post_status(Clock::now());
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  server_->stop();
+  auto lat = server_->publish_latencies_us();
+  std::sort(lat.begin(), lat.end());
+  auto pct = [&](double q) {
+    return lat.empty() ? NAN
+                       : lat[static_cast<std::size_t>(q * static_cast<double>(lat.size() - 1))];
+  };
+  spdlog::info("stopped: {} events ({} flagged), publish latency p50 {:.0f} us p99 {:.0f} us",
+               events_finished_, events_flagged_, pct(0.5), pct(0.99));
+  if (!cfg_.stats_file.empty()) {
+    nlohmann::ordered_json j;
+    j["schema"] = "brakefit.daemon_stats/1";
+    j["version"] = kVersion;
+    j["events"] = events_finished_;
+    j["events_flagged"] = events_flagged_;
+    j["frames"] = source_->counters().frames.load();
+    j["publish_latency_us"] = {{"n", lat.size()},
+                               {"p50", num(pct(0.5))},
+                               {"p99", num(pct(0.99))},
+                               {"max", num(lat.empty() ? NAN : lat.back())}};
+    const auto& s = server_->stats();
+    j["modbus"] = {{"requests", s.requests.load()},
+                   {"exceptions", s.exceptions.load()},
+                   {"malformed", s.malformed.load()},
+                   {"rejected", s.rejected.load()},
+                   {"timeouts", s.timeouts.load()}};
+    std::ofstream(cfg_.stats_file) << j.dump(2) << "\n";
+  }
+  return 0;
+}
+
+}  // namespace brakefit::daemon

@@ -1,0 +1,72 @@
+#pragma once
+// brakefitd's main loop: source -> recorder -> pipeline -> store -> Modbus registers, with
+// sd_notify READY/RELOADING/STATUS/WATCHDOG, SIGHUP reload and a clean SIGTERM exit.
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "daemon/config.hpp"
+#include "daemon/modbus_server.hpp"
+#include "daemon/store.hpp"
+#include "drivers/replay.hpp"
+
+namespace brakefit::daemon {
+
+/// Exit codes (sysexits): 69 a configured source is absent, 71 cannot listen, 73 cannot open the
+/// store, 78 configuration invalid.
+inline constexpr int kExitUnavailable = 69;
+inline constexpr int kExitOsErr = 71;
+inline constexpr int kExitCantCreate = 73;
+inline constexpr int kExitConfig = 78;
+
+struct DaemonError : std::runtime_error {
+  DaemonError(int code_, const std::string& m) : std::runtime_error(m), code(code_) {}
+  int code;
+};
+
+/// Set from signal handlers.
+struct Signals {
+  std::atomic<bool> stop{false};
+  std::atomic<bool> reload{false};
+};
+
+class Daemon {
+ public:
+  /// Opens everything the config names; throws DaemonError with the exit code and a message
+  /// naming what is missing.
+  Daemon(std::string config_path, Config cfg, Signals& sig);
+  ~Daemon();
+  int run();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void open_model();
+  void reload();
+  void publish_finished(Clock::time_point closed);
+  void post_status(Clock::time_point now);
+  void notify_status();
+  std::uint16_t status_flags(Clock::time_point now) const;
+  bool channel_missing(int ch, Clock::time_point now) const;
+
+  std::string config_path_;
+  Config cfg_;
+  Signals& sig_;
+  std::optional<Model> model_;
+  std::unique_ptr<EventStore> store_;
+  std::unique_ptr<ModbusServer> server_;
+  std::unique_ptr<drivers::FrameSource> source_;
+  std::unique_ptr<drivers::CandumpRecorder> recorder_;
+  std::unique_ptr<pipeline::Pipeline> pipeline_;
+  std::string vehicle_id_;
+  std::uint16_t seq_ = 0;
+  std::uint64_t events_finished_ = 0, events_flagged_ = 0;
+  bool recorder_error_ = false, store_error_ = false, source_finished_ = false;
+  bool reload_pending_ = false;
+  Clock::time_point start_;
+  std::array<std::optional<Clock::time_point>, 3> seen_{};  ///< ref, wheel, pressure
+  std::string last_status_;
+};
+
+}  // namespace brakefit::daemon

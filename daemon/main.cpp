@@ -1,0 +1,71 @@
+// brakefitd: the brake tester data-acquisition daemon.
+#include <spdlog/spdlog.h>
+#include <systemd/sd-daemon.h>
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "brakefit/version.hpp"
+#include "daemon/daemon.hpp"
+
+namespace {
+brakefit::daemon::Signals g_signals;
+extern "C" void on_signal(int sig) {
+  if (sig == SIGHUP)
+    g_signals.reload = true;
+  else
+    g_signals.stop = true;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace brakefit::daemon;
+  CLI::App app{"brakefitd: roller brake tester data acquisition, fitting and Modbus publishing"};
+  std::string config_path = "/etc/brakefit/brakefitd.toml";
+  bool check = false;
+  app.add_option("-c,--config", config_path, "TOML configuration")->capture_default_str();
+  app.add_flag("--check", check, "validate the configuration and exit");
+  app.set_version_flag("--version", std::string(brakefit::kVersion));
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_pattern("%^%l%$ %v");
+
+  Config cfg;
+  try {
+    std::ifstream in(config_path, std::ios::binary);
+    if (!in) {
+      spdlog::error("{}: cannot read configuration: {}", config_path, std::strerror(errno));
+      return kExitConfig;
+    }
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    cfg = parse_config(ss.str(), config_path);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return kExitConfig;
+  }
+  if (check) {
+    std::cout << config_path << ": ok\n";
+    return 0;
+  }
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+  try {
+    Daemon d(config_path, std::move(cfg), g_signals);
+    return d.run();
+  } catch (const DaemonError& e) {
+    spdlog::error("{}", e.what());
+    sd_notifyf(0, "STATUS=failed: %s", e.what());
+    return e.code;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 70;
+  }
+}

@@ -1,0 +1,73 @@
+#pragma once
+// The durable event store (SQLite, WAL, synchronous=FULL): every finished event's raw samples and
+// results in one transaction, committed before the event is published. On a full disk (free
+// space below min_free_mb, or SQLITE_FULL) raw samples stop being stored, results are still
+// kept, and degraded() is raised; nothing half-written is ever visible.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/pipeline/pipeline.hpp"
+#include "daemon/config.hpp"
+
+struct sqlite3;
+
+namespace brakefit::daemon {
+
+struct StoredEvent {
+  std::int64_t id = 0;  ///< row id: the event id published over Modbus
+  std::int64_t created_unix_s = 0;
+  std::string source, vehicle_id, bench, end_reason, flags, model_hash;
+  int pipeline_event_id = 0;
+  std::int64_t t_start_ns = 0, t_end_ns = 0;
+  std::int64_t points = 0;
+  bool samples_stored = false;
+  std::string calibration_toml;
+  std::string result_json;  ///< brakefit.event/1 document
+};
+
+class EventStore {
+ public:
+  /// Opens (creating when writable) the database; throws std::runtime_error naming the path.
+  EventStore(const StoreConfig& c, bool read_only);
+  ~EventStore();
+  EventStore(const EventStore&) = delete;
+  EventStore& operator=(const EventStore&) = delete;
+
+  /// Commits the event; returns its row id, or std::nullopt when even the results could not be
+  /// stored (error() then says why).
+  std::optional<std::int64_t> commit(const pipeline::EventResult& e, const std::string& result_json,
+                                     const std::string& calibration_toml,
+                                     const std::string& vehicle_id, const std::string& source,
+                                     const std::string& model_hash, std::int64_t now_unix_s);
+  /// Deletes events older than retention_days or beyond max_events; returns how many.
+  int apply_retention(std::int64_t now_unix_s);
+  std::vector<StoredEvent> list(int limit) const;
+  std::optional<StoredEvent> get(std::int64_t id) const;
+  std::vector<pipeline::Sample> samples(std::int64_t id) const;
+  std::int64_t count() const;
+  /// "ok" or SQLite's integrity_check report.
+  std::string integrity_check() const;
+  bool degraded() const { return degraded_; }
+  const std::string& error() const { return error_; }
+  /// Test hook: limits the database to this many pages (simulates a full disk).
+  void set_max_pages(int pages);
+
+ private:
+  bool disk_low() const;
+  int insert(const pipeline::EventResult& e, const std::string& result_json,
+             const std::string& calibration_toml, const std::string& vehicle_id,
+             const std::string& source, const std::string& model_hash, std::int64_t now,
+             bool with_samples, std::int64_t& id);
+  StoreConfig cfg_;
+  sqlite3* db_ = nullptr;
+  bool degraded_ = false;
+  std::string error_;
+};
+
+/// Raw samples <-> BLOB (little-endian records of 42 bytes).
+std::string pack_samples(const std::vector<pipeline::Sample>& s);
+std::vector<pipeline::Sample> unpack_samples(const void* data, std::size_t n);
+
+}  // namespace brakefit::daemon

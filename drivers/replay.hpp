@@ -1,0 +1,74 @@
+#pragma once
+// Sources built from the drivers: a candump log replayed in real time (or faster) or as fast as
+// possible, and the local live source (GPIO encoders + Modbus RTU pressure into one queue).
+#include <chrono>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivers/gpio.hpp"
+#include "drivers/modbus_rtu.hpp"
+#include "drivers/source.hpp"
+
+namespace brakefit::drivers {
+
+class ReplaySource final : public FrameSource {
+ public:
+  /// speed: 1.0 real time, 2.0 twice as fast; 0 as fast as possible. Throws InputError naming the
+  /// file and line for a malformed log.
+  ReplaySource(const std::string& path, double speed);
+  std::optional<can::LoggedFrame> next(int timeout_ms) override;
+  bool finished() const override { return pos_ >= frames_.size(); }
+  std::string describe() const override { return "replay " + path_; }
+
+ private:
+  std::string path_;
+  double speed_;
+  std::vector<can::LoggedFrame> frames_;
+  std::size_t pos_ = 0;
+  std::chrono::steady_clock::time_point t0_;
+};
+
+class LocalLiveSource final : public FrameSource {
+ public:
+  LocalLiveSource(const GpioConfig& g, std::unique_ptr<EdgeSource> edges, const ModbusRtuConfig& r);
+  std::optional<can::LoggedFrame> next(int timeout_ms) override { return q_.pop(timeout_ms); }
+  std::string describe() const override;
+
+ private:
+  GpioConfig gcfg_;
+  ModbusRtuConfig rcfg_;
+  FrameQueue q_;
+  LiveClock clock_;
+  std::unique_ptr<ModbusRtuPressureReader> rtu_;
+  std::unique_ptr<GpioEncoderReader> gpio_;
+};
+
+/// Writes every frame of a live session as a candump log in dir (brakefit-<unix s>.log), starting a
+/// new file past max_bytes or max_age_s, keeping at most keep_files.
+class CandumpRecorder {
+ public:
+  CandumpRecorder(std::string dir, std::uint64_t max_bytes, double max_age_s, int keep_files);
+  ~CandumpRecorder();
+  CandumpRecorder(const CandumpRecorder&) = delete;
+  CandumpRecorder& operator=(const CandumpRecorder&) = delete;
+  /// false when writing failed (disk full): the caller raises a status flag.
+  bool write(const can::LoggedFrame& f);
+  void flush();
+  const std::string& current_path() const { return path_; }
+  std::uint64_t rotations() const { return rotations_; }
+
+ private:
+  void open(std::int64_t t_us);
+  std::string dir_;
+  std::uint64_t max_bytes_;
+  std::int64_t max_age_us_;
+  int keep_files_;
+  std::FILE* f_ = nullptr;
+  std::string path_;
+  std::uint64_t bytes_ = 0, rotations_ = 0;
+  std::int64_t opened_us_ = 0;
+  int seq_ = 0;
+};
+
+}  // namespace brakefit::drivers
