@@ -12,5 +12,6 @@ void add_simulate_command(CLI::App& app);
 void add_replay_command(CLI::App& app);
 void add_export_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
+void add_events_command(CLI::App& app);
 
 }  // namespace brakefit::cli

@@ -10,6 +10,7 @@
 
 #include "brakefit/version.hpp"
 #include "daemon/daemon.hpp"
+#include "daemon/registers.hpp"
 
 namespace {
 brakefit::daemon::Signals g_signals;
@@ -25,12 +26,18 @@ int main(int argc, char** argv) {
   using namespace brakefit::daemon;
   CLI::App app{"brakefitd: roller brake tester data acquisition, fitting and Modbus publishing"};
   std::string config_path = "/etc/brakefit/brakefitd.toml";
-  bool check = false;
+  bool check = false, print_map = false;
   app.add_option("-c,--config", config_path, "TOML configuration")->capture_default_str();
   app.add_flag("--check", check, "validate the configuration and exit");
+  app.add_flag("--print-register-map", print_map,
+               "print the Modbus register map as CSV (config/modbus_registers.csv) and exit");
   app.set_version_flag("--version", std::string(brakefit::kVersion));
   CLI11_PARSE(app, argc, argv);
   spdlog::set_pattern("%^%l%$ %v");
+  if (print_map) {
+    std::cout << format_register_csv();
+    return 0;
+  }
 
   Config cfg;
   try {

@@ -57,7 +57,9 @@ void GpioEncoderReader::run() {
   std::int64_t next_ns = clock_.now_mono_ns() + period_ns;
   while (!stop_) {
     const std::int64_t now = clock_.now_mono_ns();
-    const int wait_ms = static_cast<int>(std::max<std::int64_t>(0, (next_ns - now) / 1'000'000));
+    // Rounded up (at least 1 ms): a zero timeout would make poll spin until the frame is due.
+    const int wait_ms =
+        static_cast<int>(std::max<std::int64_t>(1, (next_ns - now + 999'999) / 1'000'000));
     framer_.process(src_->wait(wait_ms));  // blocks in poll, never busy-waits
     counters_.illegal_transitions =
         framer_.ref().illegal_transitions() + framer_.wheel().illegal_transitions();
