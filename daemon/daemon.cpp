@@ -95,8 +95,8 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
             drivers::CanSocket::open(cfg_.can_interface, layout_ids()), cfg_.can_interface);
         break;
       case SourceKind::Gpio:
-        source_ = std::make_unique<drivers::LocalLiveSource>(
-            cfg_.gpio, drivers::open_gpiod_edge_source(cfg_.gpio), cfg_.rtu);
+        source_ = std::make_unique<drivers::LocalLiveSource>(cfg_.gpio, cfg_.rtu,
+                                                             drivers::open_gpiod_edge_source);
         break;
     }
   } catch (const InputError& e) {

@@ -1,4 +1,6 @@
 // brakefitd: the brake tester data-acquisition daemon.
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/sinks/systemd_sink.h>
 #include <spdlog/spdlog.h>
 #include <systemd/sd-daemon.h>
 #include <CLI/CLI.hpp>
@@ -33,7 +35,15 @@ int main(int argc, char** argv) {
                "print the Modbus register map as CSV (config/modbus_registers.csv) and exit");
   app.set_version_flag("--version", std::string(brakefit::kVersion));
   CLI11_PARSE(app, argc, argv);
-  spdlog::set_pattern("%^%l%$ %v");
+  // Under systemd (stderr is the journal) levels go to the journal as priorities; else stderr.
+  if (std::getenv("JOURNAL_STREAM")) {
+    spdlog::set_default_logger(std::make_shared<spdlog::logger>(
+        "brakefitd", std::make_shared<spdlog::sinks::systemd_sink_st>("brakefitd")));
+    spdlog::set_pattern("%v");
+  } else {
+    spdlog::set_default_logger(spdlog::stderr_color_mt("brakefitd"));
+    spdlog::set_pattern("%^%l%$ %v");
+  }
   if (print_map) {
     std::cout << format_register_csv();
     return 0;

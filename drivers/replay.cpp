@@ -37,11 +37,12 @@ std::optional<can::LoggedFrame> ReplaySource::next(int timeout_ms) {
   return frames_[pos_++];
 }
 
-LocalLiveSource::LocalLiveSource(const GpioConfig& g, std::unique_ptr<EdgeSource> edges,
-                                 const ModbusRtuConfig& r)
+LocalLiveSource::LocalLiveSource(
+    const GpioConfig& g, const ModbusRtuConfig& r,
+    const std::function<std::unique_ptr<EdgeSource>(const GpioConfig&)>& open_edges)
     : gcfg_(g), rcfg_(r) {
   rtu_ = std::make_unique<ModbusRtuPressureReader>(r, q_, counters_, clock_);
-  gpio_ = std::make_unique<GpioEncoderReader>(g, std::move(edges), q_, counters_, clock_);
+  gpio_ = std::make_unique<GpioEncoderReader>(g, open_edges(g), q_, counters_, clock_);
 }
 
 std::string LocalLiveSource::describe() const {

@@ -2,6 +2,7 @@
 // Sources built from the drivers: a candump log replayed in real time (or faster) or as fast as
 // possible, and the local live source (GPIO encoders + Modbus RTU pressure into one queue).
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -31,7 +32,10 @@ class ReplaySource final : public FrameSource {
 
 class LocalLiveSource final : public FrameSource {
  public:
-  LocalLiveSource(const GpioConfig& g, std::unique_ptr<EdgeSource> edges, const ModbusRtuConfig& r);
+  /// Opens the pressure transducer first, then the GPIO lines (open_edges), so an absent serial
+  /// port and an absent gpiochip are both named whichever is missing.
+  LocalLiveSource(const GpioConfig& g, const ModbusRtuConfig& r,
+                  const std::function<std::unique_ptr<EdgeSource>(const GpioConfig&)>& open_edges);
   std::optional<can::LoggedFrame> next(int timeout_ms) override { return q_.pop(timeout_ms); }
   std::string describe() const override;
 

@@ -3,7 +3,8 @@
 set -euo pipefail
 BRAKEFIT_DEBS=(build-essential cmake ninja-build ccache pkg-config python3 libxml2-utils can-utils
   libeigen3-dev libspdlog-dev libfmt-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
-  libssl-dev libgtest-dev libgmock-dev libbenchmark-dev)
+  libssl-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libmodbus-dev libsqlite3-dev sqlite3 libsystemd-dev libgpiod-dev gpiod mbpoll systemd)
 
 brakefit_install_deps() {
   local missing=()

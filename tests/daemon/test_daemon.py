@@ -1,0 +1,454 @@
+"""brakefitd as real processes on loopback: replay end to end (published parameters equal
+`brakefit replay`'s after float32 rounding, whatever the pacing; the store holds them), libmodbus
+and mbpoll clients, sd_notify READY/RELOADING/WATCHDOG/STOPPING on our own NOTIFY_SOCKET, config
+errors, absent sources, faults (sensor timeout mid-event, malformed requests, 100 clients,
+kill -9 during an event), the systemd unit and cmake --install."""
+import json
+import os
+import re
+import shutil
+import signal
+import socket
+import sqlite3
+import struct
+import subprocess
+import tempfile
+import threading
+import time
+import unittest
+
+DAEMON = os.environ["BRAKEFITD_BIN"]
+CLI = os.environ["BRAKEFIT_BIN"]
+ROOT = os.environ["BRAKEFIT_ROOT"]
+PROBE = os.environ["MODBUS_PROBE_BIN"]
+REC = os.path.join(ROOT, "data", "recorded")
+MODEL = os.path.join(ROOT, "data", "models", "default.json")
+
+
+def read_text(path):
+    with open(path) as f:
+        return f.read()
+
+
+BENCH = read_text(os.path.join(REC, "roller_2p2bar_fast.bench.toml"))
+METHODS = ["som", "mlp", "lm", "hybrid"]
+
+
+def f32(x):
+    return struct.unpack(">f", struct.pack(">f", x))[0]
+
+
+def free_port():
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+def read_log(name):
+    frames = []
+    for line in read_text(os.path.join(REC, name)).splitlines():
+        m = re.match(r"\((\d+)\.(\d+)\) (\S+) (\S+)", line)
+        frames.append([int(m.group(1)) * 1_000_000 + int(m.group(2)), m.group(3), m.group(4)])
+    return frames
+
+
+
+def write_log(path, frames):
+    with open(path, "w") as f:
+        for t, iface, fr in frames:
+            f.write(f"({t // 1_000_000:010d}.{t % 1_000_000:06d}) {iface} {fr}\n")
+
+
+ENCODER_IDS = ("100", "101", "102")
+
+
+def concat(parts, gap_us=500_000):
+    """Frame lists one after the other, each shifted to start gap_us after the previous end; the
+    encoder frames' cumulative counts and sender edge times continue across the joins, as on a
+    bench that kept running."""
+    out, last_count = [], {}
+    for p in parts:
+        shift = 0 if not out else out[-1][0] + gap_us - p[0][0]
+        first_count, offset = {}, {}
+        for t, iface, fr in p:
+            cid, data = fr.split("#")
+            if cid in ENCODER_IDS:
+                b = bytearray.fromhex(data)
+                count = int.from_bytes(b[0:3], "little")
+                if cid not in offset:
+                    offset[cid] = (last_count.get(cid, count) - count) % (1 << 24)
+                count = (count + offset[cid]) % (1 << 24)
+                edge = (int.from_bytes(b[3:7], "little") + shift) % (1 << 32)
+                b[0:3] = count.to_bytes(3, "little")
+                b[3:7] = edge.to_bytes(4, "little")
+                last_count[cid] = count
+                fr = f"{cid}#{b.hex().upper()}"
+            out.append([t + shift, iface, fr])
+    return out
+
+
+class Notify:
+    """Our own NOTIFY_SOCKET: collects what the daemon sends."""
+
+    def __init__(self, path):
+        self.path = path
+        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+        self.sock.bind(path)
+        self.sock.settimeout(0.1)
+        self.messages = []
+
+    def pump(self):
+        """One message, waiting at most 0.1 s."""
+        try:
+            self.messages.append(self.sock.recv(4096).decode())
+        except socket.timeout:
+            pass
+
+    def wait_for(self, text, timeout=10.0, after=0):
+        end = time.time() + timeout
+        while time.time() < end:
+            self.pump()
+            for i, m in enumerate(self.messages[after:], after):
+                if text in m.split("\n"):
+                    return i
+        raise AssertionError(f"no {text!r} from the daemon; got {self.messages}")
+
+
+class Daemon:
+    def __init__(self, tmp, source, *, store=None, speed=0.0, exit_at_end=False, extra="",
+                 env=None, port=None):
+        self.tmp = tmp
+        self.port = port or free_port()
+        self.store = store or os.path.join(tmp, "events.db")
+        self.stats = os.path.join(tmp, "stats.json")
+        self.config = os.path.join(tmp, "brakefitd.toml")
+        with open(self.config, "w") as f:
+            f.write(f'[daemon]\nmodel = "{MODEL}"\nstats_file = "{self.stats}"\n'
+                    f'[source]\nkind = "replay"\nfile = "{source}"\nspeed = {speed}\n'
+                    f'exit_at_end = {"true" if exit_at_end else "false"}\n'
+                    f'{BENCH}\n[modbus_tcp]\naddress = "127.0.0.1"\nport = {self.port}\n'
+                    f'[store]\npath = "{self.store}"\nmin_free_mb = 0\n{extra}')
+        self.env = dict(os.environ, **(env or {}))
+        self.err = open(os.path.join(tmp, "brakefitd.log"), "a")
+        self.proc = subprocess.Popen([DAEMON, "--config", self.config], env=self.env,
+                                     stdout=self.err, stderr=self.err)
+        self.wait_port()
+
+    def wait_port(self, timeout=10):
+        end = time.time() + timeout
+        while time.time() < end:
+            if self.proc.poll() is not None:
+                raise AssertionError(f"brakefitd exited {self.proc.returncode}: {self.log()}")
+            try:
+                socket.create_connection(("127.0.0.1", self.port), 0.2).close()
+                return
+            except OSError:
+                time.sleep(0.05)
+        raise AssertionError("brakefitd did not listen")
+
+    def probe(self):
+        out = subprocess.run([PROBE, "--port", str(self.port), "read"], capture_output=True,
+                             text=True, timeout=10)
+        assert out.returncode == 0, out.stderr
+        return json.loads(out.stdout)
+
+    def wait_events(self, n, timeout=60):
+        end = time.time() + timeout
+        while time.time() < end:
+            p = self.probe()
+            if p["registers"]["events_finished"] >= n:
+                return p
+            time.sleep(0.1)
+        raise AssertionError(f"fewer than {n} events published: {self.log()}")
+
+    def log(self):
+        self.err.flush()
+        return read_text(os.path.join(self.tmp, "brakefitd.log"))
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        rc = self.proc.wait(timeout=15)
+        self.err.close()
+        return rc
+
+
+def replay_reference(log):
+    bench = os.path.splitext(log)[0] + ".bench.toml"
+    out = subprocess.run([CLI, "replay", "--json", "--model", MODEL, "--bench", bench, log],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    return [json.loads(l) for l in out.stdout.splitlines()]
+
+
+def stored(db):
+    out = subprocess.run([CLI, "events", "--db", db, "list", "--json", "--limit", "1000"],
+                         capture_output=True, text=True, timeout=30)
+    assert out.returncode == 0, out.stderr
+    return sorted((json.loads(l) for l in out.stdout.splitlines()), key=lambda d: d["id"])
+
+
+class DaemonTest(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="bf_daemon_")
+        self.daemons = []
+
+    def tearDown(self):
+        for d in self.daemons:
+            if d.proc.poll() is None:
+                d.proc.kill()
+                d.proc.wait()
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def start(self, *a, **k):
+        d = Daemon(self.tmp, *a, **k)
+        self.daemons.append(d)
+        return d
+
+    def three_events_log(self):
+        path = os.path.join(self.tmp, "three.log")
+        write_log(path, concat([read_log(f"roller_2p2bar_{s}.log") for s in ("fast", "medium", "slow")]))
+        shutil.copy(os.path.join(REC, "roller_2p2bar_fast.bench.toml"),
+                    os.path.join(self.tmp, "three.bench.toml"))
+        return path
+
+    def assert_published_equals(self, probe, ref):
+        r = probe["registers"]
+        self.assertTrue(probe["consistent"])
+        reasons = ["other", "switch_off_slip", "wheel_lock", "release", "stopped"]
+        self.assertEqual(reasons[r["event.end_reason"]], ref["end_reason"])
+        self.assertEqual(r["event.flags"], 0)
+        self.assertEqual(r["event.points"], ref["points"])
+        by = {x["method"]: x for x in ref["results"]}
+        for m in METHODS:
+            for p in "BCDE":
+                self.assertEqual(r[f"event.{m}.{p}"], f32(by[m][p]), f"{m}.{p}")
+            self.assertEqual(r[f"event.{m}.mape_pct"], f32(by[m]["mape_pct"]))
+        h = int(ref["model_hash"].split(":")[1][:8], 16)
+        self.assertEqual(r["event.model_hash"], h)
+
+    def test_replay_publishes_what_brakefit_replay_computes_whatever_the_pacing(self):
+        log = self.three_events_log()
+        ref = replay_reference(log)
+        self.assertEqual(len(ref), 3)
+        for speed in (0.0, 4.0):
+            with self.subTest(speed=speed):
+                store = os.path.join(self.tmp, f"events-{speed}.db")
+                d = self.start(log, speed=speed, store=store)
+                p = d.wait_events(3, timeout=60)
+                self.assert_published_equals(p, ref[-1])
+                self.assertEqual(p["registers"]["event.id"], 3)
+                self.assertEqual(p["registers"]["events_flagged"], 0)
+                self.assertTrue(p["registers"]["status_flags"] & 1)
+                # mbpoll (a third-party client) reads the same hybrid B, C, D, E (ABCD floats).
+                out = subprocess.run(["mbpoll", "-m", "tcp", "-p", str(d.port), "-0", "-1", "-B",
+                                      "-t", "3:float", "-r", "156", "-c", "4", "127.0.0.1"],
+                                     capture_output=True, text=True, timeout=10)
+                vals = [float(v) for v in re.findall(r"^\[\d+\]:\s+(\S+)", out.stdout, re.M)]
+                hyb = next(x for x in ref[-1]["results"] if x["method"] == "hybrid")
+                self.assertEqual(len(vals), 4, out.stdout + out.stderr)
+                for v, k in zip(vals, "BCDE"):
+                    self.assertAlmostEqual(v, hyb[k], delta=abs(hyb[k]) * 1e-5 + 1e-6)
+                self.assertEqual(d.stop(), 0)
+                # The store holds every event with the same results.
+                st = stored(store)
+                self.assertEqual([s["id"] for s in st], [1, 2, 3])
+                for s, r in zip(st, ref):
+                    self.assertTrue(s["samples_stored"])
+                    self.assertEqual(s["event"]["results"], r["results"])
+                    self.assertEqual(s["model_hash"], r["model_hash"])
+                stats = json.loads(read_text(d.stats))
+                self.assertEqual(stats["events"], 3)
+                self.assertEqual(stats["publish_latency_us"]["n"], 3)
+
+    def test_notify_ready_watchdog_reload_and_clean_stop(self):
+        notify = Notify(os.path.join(self.tmp, "notify.sock"))
+        d = self.start(os.path.join(REC, "roller_2p2bar_fast.log"),
+                       env={"NOTIFY_SOCKET": notify.path, "WATCHDOG_USEC": "200000"})
+        i = notify.wait_for("READY=1")
+        w = notify.wait_for("WATCHDOG=1", after=i)
+        notify.wait_for("WATCHDOG=1", after=w + 1)  # keeps pinging while idle after the replay
+        self.assertTrue(any(m.startswith("STATUS=") for m in notify.messages))
+        d.wait_events(1)
+        d.proc.send_signal(signal.SIGHUP)
+        r = notify.wait_for("RELOADING=1", after=i + 1)
+        notify.wait_for("READY=1", after=r)
+        # A broken config on reload: logged, the running configuration kept.
+        with open(d.config, "a") as f:
+            f.write("\n[bogus]\n")
+        d.proc.send_signal(signal.SIGHUP)
+        r2 = notify.wait_for("RELOADING=1", after=r + 1)
+        notify.wait_for("READY=1", after=r2)
+        self.assertIsNone(d.proc.poll())
+        self.assertIn("reload failed", d.log())
+        self.assertEqual(d.probe()["registers"]["events_finished"], 1)
+        self.assertEqual(d.stop(), 0)
+        notify.wait_for("STOPPING=1")
+
+    def run_daemon(self, config_text):
+        path = os.path.join(self.tmp, "bad.toml")
+        with open(path, "w") as f:
+            f.write(config_text)
+        return subprocess.run([DAEMON, "--config", path], capture_output=True, text=True, timeout=20)
+
+    def test_config_errors_exit_78_naming_the_key(self):
+        base = f'[source]\nkind = "replay"\nfile = "x.log"\n{BENCH}\n'
+        for extra, key in (("[store]\nretention = 3\n", "store.retention"),
+                           ("[modbus_tcp]\nport = \"x\"\n", "modbus_tcp.port"),
+                           ("[modbus_tcp]\nport = 99999\n", "modbus_tcp.port"),
+                           ("[pipeline]\nstart_pressure_bar = 0\n", "pipeline.start_pressure_bar")):
+            out = self.run_daemon(base + extra)
+            self.assertEqual(out.returncode, 78, out.stderr)
+            self.assertIn(f"'{key}'", out.stderr)
+        out = subprocess.run([DAEMON, "--config", os.path.join(self.tmp, "missing.toml")],
+                             capture_output=True, text=True)
+        self.assertEqual(out.returncode, 78)
+        self.assertIn("missing.toml", out.stderr)
+        out = subprocess.run([DAEMON, "--config", os.path.join(ROOT, "config", "brakefitd.toml"),
+                              "--check"], capture_output=True, text=True)
+        self.assertEqual(out.returncode, 0, out.stderr)
+
+    def test_absent_sources_exit_nonzero_naming_them(self):
+        store = os.path.join(self.tmp, "e.db")
+        common = f'{BENCH}\n[modbus_tcp]\naddress = "127.0.0.1"\nport = 0\n[store]\npath = "{store}"\n'
+        out = self.run_daemon(f'[source]\nkind = "socketcan"\ninterface = "bfcan9"\n{common}')
+        self.assertEqual(out.returncode, 69, out.stderr)
+        self.assertIn("bfcan9", out.stderr)
+        out = self.run_daemon(f'[source]\nkind = "replay"\nfile = "{self.tmp}/none.log"\n{common}')
+        self.assertEqual(out.returncode, 69, out.stderr)
+        self.assertIn("none.log", out.stderr)
+        rtu = '[modbus_rtu]\ndevice = "/dev/ttyBF404"\n'
+        gpio = '[gpio]\nchip = "gpiochip77"\n'
+        out = self.run_daemon(f'[source]\nkind = "gpio"\n{gpio}{rtu}{common}')
+        self.assertEqual(out.returncode, 69, out.stderr)
+        self.assertIn("/dev/ttyBF404", out.stderr)
+        master, slave = os.openpty()  # a serial port that exists: now the gpiochip is missing
+        try:
+            rtu = f'[modbus_rtu]\ndevice = "{os.ttyname(slave)}"\n'
+            out = self.run_daemon(f'[source]\nkind = "gpio"\n{gpio}{rtu}{common}')
+            self.assertEqual(out.returncode, 69, out.stderr)
+            self.assertIn("gpiochip77", out.stderr)
+        finally:
+            os.close(master)
+            os.close(slave)
+
+    def test_sensor_timeout_mid_event_aborts_it_and_the_daemon_carries_on(self):
+        fast = read_log("roller_2p2bar_fast.log")
+        # The event runs from 1.04 s to 1.88 s: the bus goes silent at 1.4 s for 3 s.
+        cut = fast[0][0] + 1_400_000
+        part1 = [f for f in fast if f[0] < cut]
+        path = os.path.join(self.tmp, "gap.log")
+        write_log(path, concat([part1, read_log("roller_2p2bar_medium.log")], gap_us=3_000_000))
+        d = self.start(path, speed=2.0)
+        saw_missing = False
+        end = time.time() + 30
+        while time.time() < end:
+            r = d.probe()["registers"]
+            saw_missing |= bool(r["status_flags"] & (1 << 4))  # pressure missing during the gap
+            if r["events_finished"] >= 2:
+                break
+            time.sleep(0.05)
+        self.assertEqual(r["events_finished"], 2, d.log())
+        self.assertEqual(r["events_flagged"], 1)
+        self.assertTrue(saw_missing)
+        self.assertIn(r["event.end_reason"], (1, 2))  # the second event is whole and fitted
+        self.assertIsNotNone(r["event.hybrid.B"])
+        self.assertEqual(d.stop(), 0)
+        st = stored(d.store)
+        self.assertEqual(st[0]["event"]["end_reason"], "sensor_timeout")
+        self.assertIn("aborted", st[0]["event"]["flags"])
+        self.assertEqual(st[0]["event"]["results"], [])
+        self.assertEqual(st[1]["event"]["flags"], [])
+        self.assertTrue(st[1]["event"]["results"])
+
+    def test_malformed_requests_and_a_hundred_clients_against_the_process(self):
+        d = self.start(os.path.join(REC, "roller_2p2bar_fast.log"))
+        d.wait_events(1)
+        s = socket.create_connection(("127.0.0.1", d.port))
+        s.sendall(bytes([0, 1, 0, 0, 0, 6, 1, 6, 0, 0, 0, 2]))  # write on a read-only map
+        reply = s.recv(64)
+        self.assertEqual(reply[7:9], bytes([0x86, 0x01]))
+        s.sendall(bytes([0, 2, 0, 7, 0, 6, 1, 4, 0, 0, 0, 1]))  # protocol id 7
+        self.assertEqual(s.recv(64), b"")
+        s.close()
+        socks = [socket.create_connection(("127.0.0.1", d.port)) for _ in range(100)]
+        for i, c in enumerate(socks):
+            c.sendall(bytes([0, i, 0, 0, 0, 6, 1, 4, 0, 101, 0, 2]))
+        ok = 0
+        for i, c in enumerate(socks):
+            c.settimeout(5)
+            r = c.recv(64)
+            ok += len(r) == 13 and r[1] == i and struct.unpack(">I", r[9:13])[0] == 1
+            c.close()
+        self.assertEqual(ok, 100)
+        self.assertTrue(d.probe()["consistent"])
+        self.assertEqual(d.stop(), 0)
+
+    def test_kill_9_during_an_event_then_restart_loses_no_finished_event(self):
+        log = self.three_events_log()
+        store = os.path.join(self.tmp, "k.db")
+        d = self.start(log, speed=2.0, store=store)
+        end = time.time() + 40
+        while time.time() < end:
+            r = d.probe()["registers"]
+            if r["events_finished"] >= 1 and r["status_flags"] & (1 << 5):
+                break
+            time.sleep(0.02)
+        published = r["events_finished"]
+        self.assertGreaterEqual(published, 1)
+        self.assertTrue(r["status_flags"] & (1 << 5), "no event was running when killed")
+        d.proc.kill()
+        d.proc.wait()
+        con = sqlite3.connect(store)
+        self.assertEqual(con.execute("PRAGMA integrity_check").fetchone()[0], "ok")
+        n = con.execute("SELECT COUNT(*) FROM events").fetchone()[0]
+        con.close()
+        self.assertGreaterEqual(n, published)  # committed before published
+        self.assertEqual(n, r["event.id"])
+        d2 = self.start(log, speed=0, store=store, exit_at_end=True)
+        self.assertEqual(d2.proc.wait(timeout=60), 0)
+        st = stored(store)
+        self.assertEqual([s["id"] for s in st], list(range(1, n + 4)))
+        self.assertTrue(all(s["event"]["results"] for s in st))
+
+    def test_systemd_unit_verifies_and_is_hardened(self):
+        if not shutil.which("systemd-analyze"):
+            self.skipTest("systemd-analyze is not installed")
+        unit = read_text(os.path.join(ROOT, "systemd", "brakefitd.service"))
+        path = os.path.join(self.tmp, "brakefitd.service")
+        with open(path, "w") as f:
+            f.write(unit.replace("/usr/sbin/brakefitd", DAEMON))
+        out = subprocess.run(["systemd-analyze", "verify", path], capture_output=True, text=True,
+                             cwd=self.tmp)
+        self.assertEqual(out.returncode, 0, out.stdout + out.stderr)
+        out = subprocess.run(["systemd-analyze", "security", "--offline=yes", path],
+                             capture_output=True, text=True, cwd=self.tmp)
+        m = re.search(r"Overall exposure level for brakefitd.service: ([\d.]+)", out.stdout)
+        self.assertIsNotNone(m, out.stdout + out.stderr)
+        self.assertLessEqual(float(m.group(1)), 3.0)
+        for key in ("Type=notify", "WatchdogSec=", "Restart=on-failure", "ProtectSystem=strict",
+                    "StateDirectory=brakefit", "AF_CAN", "DeviceAllow=/dev/gpiochip0",
+                    "ExecReload=/bin/kill -HUP $MAINPID"):
+            self.assertIn(key, unit)
+
+    def test_cmake_install_places_everything(self):
+        build = os.path.dirname(os.path.dirname(DAEMON))
+        dest = os.path.join(self.tmp, "root")
+        out = subprocess.run(["cmake", "--install", build, "--prefix", "/usr"],
+                             env=dict(os.environ, DESTDIR=dest), capture_output=True, text=True)
+        self.assertEqual(out.returncode, 0, out.stderr)
+        for p in ("usr/sbin/brakefitd", "usr/bin/brakefit", "lib/systemd/system/brakefitd.service",
+                  "etc/brakefit/brakefitd.toml", "lib/udev/rules.d/60-brakefit.rules",
+                  "usr/lib/tmpfiles.d/brakefit.conf", "usr/share/brakefit/models/default.json",
+                  "usr/share/brakefit/modbus_registers.csv"):
+            self.assertTrue(os.path.exists(os.path.join(dest, p)), p)
+        cfg = os.path.join(dest, "etc/brakefit/brakefitd.toml")
+        self.assertIn('model = "/usr/share/brakefit/models/default.json"', read_text(cfg))
+        out = subprocess.run([DAEMON, "--config", cfg, "--check"], capture_output=True, text=True)
+        self.assertEqual(out.returncode, 0, out.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
