@@ -1,6 +1,7 @@
 #include "core/identify.hpp"
 
 #include <cmath>
+#include <future>
 
 namespace brakefit {
 
@@ -97,7 +98,7 @@ fit::MfFitOptions fit_options_for(const Model* m) {
 }
 
 MethodResult run_method(Method method, const Model* model, const Curve& c,
-                        const fit::MfFitOptions& options) {
+                        const fit::MfFitOptions& options, bool parallel) {
   MethodResult r;
   r.method = method;
   switch (method) {
@@ -121,8 +122,10 @@ MethodResult run_method(Method method, const Model* model, const Curve& c,
     case Method::Hybrid: {
       // LM from the SOM estimate and from the MLP estimate; the lower sum of squares wins.
       const SomEstimate e = identify_som(*model, c);
+      auto mlp_job = std::async(parallel ? std::launch::async : std::launch::deferred,
+                                [&] { return fit::fit_mf(c, identify_mlp(*model, c), options); });
       fit::MfFitResult best = fit::fit_mf(c, e.params, options);
-      const fit::MfFitResult from_mlp = fit::fit_mf(c, identify_mlp(*model, c), options);
+      const fit::MfFitResult from_mlp = mlp_job.get();
       if (from_mlp.ssr < best.ssr) best = from_mlp;
       r.params = best.params;
       r.stderr_ = best.stderr_;

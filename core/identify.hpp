@@ -65,7 +65,8 @@ MfParams identify_mlp(const Model& m, const Curve& c);
 fit::MfFitOptions fit_options_for(const Model* m);
 
 /// Runs one method on a curve (som/mlp/hybrid need a trained model).
+/// parallel: the hybrid's two LM starts run concurrently (same result).
 MethodResult run_method(Method method, const Model* model, const Curve& c,
-                        const fit::MfFitOptions& options = {});
+                        const fit::MfFitOptions& options = {}, bool parallel = false);
 
 }  // namespace brakefit

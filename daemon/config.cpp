@@ -206,6 +206,7 @@ Config parse_config(std::string_view text, const std::string& source) {
   c.calibration = pipeline::calibration_from_table(*b, rd, "bench.");
   c.gpio.ground = c.calibration.bench == can::BenchKind::Ground;
   c.pipeline.events.sensor_timeout_s = c.sensor_timeout_s;
+  c.pipeline.parallel_methods = true;
   if (const auto* t = rd.table(root, "", "pipeline")) parse_pipeline(rd, *t, c);
   if (const auto* t = rd.table(root, "", "modbus_tcp")) parse_tcp(rd, *t, c);
   if (const auto* t = rd.table(root, "", "store")) parse_store(rd, *t, c);

@@ -209,6 +209,7 @@ void Daemon::publish_finished(Clock::time_point closed) {
     doc["vehicle_id"] = vehicle_id_;
     const std::string hash = model ? model->hash : "";
     // 1. durable first
+    const auto t_fitted = Clock::now();
     const auto id = store_->commit(er, doc.dump(), pipeline::format_calibration(cfg_.calibration),
                                    vehicle_id_, source_->describe(), hash, unix_now());
     if (!id) {
@@ -257,6 +258,9 @@ void Daemon::publish_finished(Clock::time_point closed) {
     }
     w.u16("event.seq", seq_);
     server_->post(std::move(w), closed);
+    spdlog::debug("event {}: fit {:.2f} ms, store {:.2f} ms", id.value_or(0),
+                  std::chrono::duration<double, std::milli>(t_fitted - closed).count(),
+                  std::chrono::duration<double, std::milli>(Clock::now() - t_fitted).count());
     ++events_finished_;
     if (!er.event.flags.empty()) ++events_flagged_;
     const MethodResult* best = er.results.empty() ? nullptr : &er.results.back();

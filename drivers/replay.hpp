@@ -20,6 +20,7 @@ class ReplaySource final : public FrameSource {
   ReplaySource(const std::string& path, double speed);
   std::optional<can::LoggedFrame> next(int timeout_ms) override;
   bool finished() const override { return pos_ >= frames_.size(); }
+  static constexpr std::chrono::milliseconds kCoalesce{1};
   std::string describe() const override { return "replay " + path_; }
 
  private:

@@ -1,5 +1,7 @@
 #include "core/pipeline/pipeline.hpp"
 
+#include <future>
+
 namespace brakefit::pipeline {
 
 Pipeline::Pipeline(const Calibration& c, const PipelineOptions& o, const Model* model)
@@ -29,9 +31,17 @@ void Pipeline::handle(Event e) {
   if (r.curve.size() < kMinCurvePoints && e.fittable()) e.flags.push_back("too_short");
   if (opt_.fit && e.fittable()) {
     const fit::MfFitOptions fo = fit_options_for(model_);
-    for (Method m : opt_.methods) {
-      if (m != Method::Lm && !model_) continue;
-      r.results.push_back(run_method(m, model_, r.curve, fo));
+    std::vector<Method> methods;
+    for (Method m : opt_.methods)
+      if (m == Method::Lm || model_) methods.push_back(m);
+    if (opt_.parallel_methods && methods.size() > 1) {
+      std::vector<std::future<MethodResult>> jobs;
+      for (Method m : methods)
+        jobs.push_back(std::async(std::launch::async,
+                                  [&, m] { return run_method(m, model_, r.curve, fo, true); }));
+      for (auto& j : jobs) r.results.push_back(j.get());
+    } else {
+      for (Method m : methods) r.results.push_back(run_method(m, model_, r.curve, fo));
     }
   }
   r.event = std::move(e);

@@ -18,6 +18,9 @@ struct PipelineOptions {
   ForceSource force = ForceSource::Pressure;
   std::vector<Method> methods{Method::Som, Method::Mlp, Method::Lm, Method::Hybrid};
   bool fit = true;  ///< false: detection only (throughput measurement)
+  /// Run the methods of one event concurrently (the daemon: shorter event-end to publish latency).
+  /// Results are identical either way; each method reads the model only.
+  bool parallel_methods = false;
 };
 
 struct EventResult {

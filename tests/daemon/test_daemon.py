@@ -13,9 +13,10 @@ import sqlite3
 import struct
 import subprocess
 import tempfile
-import threading
 import time
 import unittest
+
+from logtools import concat, read_log, read_text, write_log
 
 DAEMON = os.environ["BRAKEFITD_BIN"]
 CLI = os.environ["BRAKEFIT_BIN"]
@@ -23,11 +24,6 @@ ROOT = os.environ["BRAKEFIT_ROOT"]
 PROBE = os.environ["MODBUS_PROBE_BIN"]
 REC = os.path.join(ROOT, "data", "recorded")
 MODEL = os.path.join(ROOT, "data", "models", "default.json")
-
-
-def read_text(path):
-    with open(path) as f:
-        return f.read()
 
 
 BENCH = read_text(os.path.join(REC, "roller_2p2bar_fast.bench.toml"))
@@ -44,49 +40,6 @@ def free_port():
     port = s.getsockname()[1]
     s.close()
     return port
-
-
-def read_log(name):
-    frames = []
-    for line in read_text(os.path.join(REC, name)).splitlines():
-        m = re.match(r"\((\d+)\.(\d+)\) (\S+) (\S+)", line)
-        frames.append([int(m.group(1)) * 1_000_000 + int(m.group(2)), m.group(3), m.group(4)])
-    return frames
-
-
-
-def write_log(path, frames):
-    with open(path, "w") as f:
-        for t, iface, fr in frames:
-            f.write(f"({t // 1_000_000:010d}.{t % 1_000_000:06d}) {iface} {fr}\n")
-
-
-ENCODER_IDS = ("100", "101", "102")
-
-
-def concat(parts, gap_us=500_000):
-    """Frame lists one after the other, each shifted to start gap_us after the previous end; the
-    encoder frames' cumulative counts and sender edge times continue across the joins, as on a
-    bench that kept running."""
-    out, last_count = [], {}
-    for p in parts:
-        shift = 0 if not out else out[-1][0] + gap_us - p[0][0]
-        first_count, offset = {}, {}
-        for t, iface, fr in p:
-            cid, data = fr.split("#")
-            if cid in ENCODER_IDS:
-                b = bytearray.fromhex(data)
-                count = int.from_bytes(b[0:3], "little")
-                if cid not in offset:
-                    offset[cid] = (last_count.get(cid, count) - count) % (1 << 24)
-                count = (count + offset[cid]) % (1 << 24)
-                edge = (int.from_bytes(b[3:7], "little") + shift) % (1 << 32)
-                b[0:3] = count.to_bytes(3, "little")
-                b[3:7] = edge.to_bytes(4, "little")
-                last_count[cid] = count
-                fr = f"{cid}#{b.hex().upper()}"
-            out.append([t + shift, iface, fr])
-    return out
 
 
 class Notify:
@@ -209,7 +162,7 @@ class DaemonTest(unittest.TestCase):
 
     def three_events_log(self):
         path = os.path.join(self.tmp, "three.log")
-        write_log(path, concat([read_log(f"roller_2p2bar_{s}.log") for s in ("fast", "medium", "slow")]))
+        write_log(path, concat([read_log(os.path.join(REC, f"roller_2p2bar_{s}.log")) for s in ("fast", "medium", "slow")]))
         shutil.copy(os.path.join(REC, "roller_2p2bar_fast.bench.toml"),
                     os.path.join(self.tmp, "three.bench.toml"))
         return path
@@ -335,12 +288,12 @@ class DaemonTest(unittest.TestCase):
             os.close(slave)
 
     def test_sensor_timeout_mid_event_aborts_it_and_the_daemon_carries_on(self):
-        fast = read_log("roller_2p2bar_fast.log")
+        fast = read_log(os.path.join(REC, "roller_2p2bar_fast.log"))
         # The event runs from 1.04 s to 1.88 s: the bus goes silent at 1.4 s for 3 s.
         cut = fast[0][0] + 1_400_000
         part1 = [f for f in fast if f[0] < cut]
         path = os.path.join(self.tmp, "gap.log")
-        write_log(path, concat([part1, read_log("roller_2p2bar_medium.log")], gap_us=3_000_000))
+        write_log(path, concat([part1, read_log(os.path.join(REC, "roller_2p2bar_medium.log"))], gap_us=3_000_000))
         d = self.start(path, speed=2.0)
         saw_missing = False
         end = time.time() + 30
