@@ -130,7 +130,8 @@ class Daemon:
 
 def replay_reference(log):
     bench = os.path.splitext(log)[0] + ".bench.toml"
-    out = subprocess.run([CLI, "replay", "--json", "--model", MODEL, "--bench", bench, log],
+    args = ["--bench", bench] if os.path.exists(bench) else []
+    out = subprocess.run([CLI, "replay", "--json", "--model", MODEL, *args, log],
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     return [json.loads(l) for l in out.stdout.splitlines()]
@@ -212,6 +213,24 @@ class DaemonTest(unittest.TestCase):
                     self.assertTrue(s["samples_stored"])
                     self.assertEqual(s["event"]["results"], r["results"])
                     self.assertEqual(s["model_hash"], r["model_hash"])
+                # events show / export: the stored samples replay to the same event.
+                out = subprocess.run([CLI, "events", "--db", store, "show", "2"],
+                                     capture_output=True, text=True, timeout=30)
+                self.assertEqual(out.returncode, 0, out.stderr)
+                shown = json.loads(out.stdout)
+                self.assertEqual(shown["schema"], "brakefit.stored_event/1")
+                self.assertEqual(shown["event"]["results"], ref[1]["results"])
+                csv = os.path.join(self.tmp, f"e2-{speed}.csv")
+                out = subprocess.run([CLI, "events", "--db", store, "export", "2", "--out", csv],
+                                     capture_output=True, text=True, timeout=30)
+                self.assertEqual(out.returncode, 0, out.stderr)
+                again = replay_reference(csv)
+                self.assertEqual(len(again), 1)
+                self.assertEqual(again[0]["points"], ref[1]["points"])
+                out = subprocess.run([CLI, "events", "--db", store, "show", "99"],
+                                     capture_output=True, text=True, timeout=30)
+                self.assertEqual(out.returncode, 65)
+                self.assertIn("no event with id 99", out.stderr)
                 stats = json.loads(read_text(d.stats))
                 self.assertEqual(stats["events"], 3)
                 self.assertEqual(stats["publish_latency_us"]["n"], 3)
