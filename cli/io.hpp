@@ -3,20 +3,16 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/exit_codes.hpp"
 #include "core/identify.hpp"
 
 namespace brakefit::cli {
 
-// sysexits-style codes: 65 bad data, 66 missing input, 73 cannot write, 78 bad configuration.
-inline constexpr int kExitDataError = 65;
-inline constexpr int kExitNoInput = 66;
-inline constexpr int kExitCantCreate = 73;
-inline constexpr int kExitConfig = 78;
-
-struct ExitError : std::runtime_error {
-  ExitError(int code_, const std::string& msg) : std::runtime_error(msg), code(code_) {}
-  int code;
-};
+using brakefit::ExitError;
+using brakefit::kExitCantCreate;
+using brakefit::kExitConfig;
+using brakefit::kExitDataError;
+using brakefit::kExitNoInput;
 
 std::string read_file(const std::string& path);
 /// Writes via a temporary file and rename, so a reader never sees half a file.

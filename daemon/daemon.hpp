@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "core/exit_codes.hpp"
 #include "daemon/config.hpp"
 #include "daemon/modbus_server.hpp"
 #include "daemon/store.hpp"
@@ -14,17 +15,9 @@
 
 namespace brakefit::daemon {
 
-/// Exit codes (sysexits): 69 a configured source is absent, 71 cannot listen, 73 cannot open the
-/// store, 78 configuration invalid.
-inline constexpr int kExitUnavailable = 69;
-inline constexpr int kExitOsErr = 71;
-inline constexpr int kExitCantCreate = 73;
-inline constexpr int kExitConfig = 78;
-
-struct DaemonError : std::runtime_error {
-  DaemonError(int code_, const std::string& m) : std::runtime_error(m), code(code_) {}
-  int code;
-};
+/// Exit codes: 69 a configured source is absent, 71 cannot listen, 73 cannot open the store,
+/// 78 configuration invalid (core/exit_codes.hpp); DaemonError carries one.
+using DaemonError = ExitError;
 
 /// Set from signal handlers.
 struct Signals {

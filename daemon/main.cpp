@@ -26,6 +26,7 @@ extern "C" void on_signal(int sig) {
 
 int main(int argc, char** argv) {
   using namespace brakefit::daemon;
+  using brakefit::kExitConfig;
   CLI::App app{"brakefitd: roller brake tester data acquisition, fitting and Modbus publishing"};
   std::string config_path = "/etc/brakefit/brakefitd.toml";
   bool check = false, print_map = false;
