@@ -13,5 +13,6 @@ void add_replay_command(CLI::App& app);
 void add_export_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_events_command(CLI::App& app);
+void add_gap_command(CLI::App& app);
 
 }  // namespace brakefit::cli

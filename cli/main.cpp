@@ -33,6 +33,7 @@ int run(int argc, char** argv) {
   brakefit::cli::add_export_command(app);
   brakefit::cli::add_compare_command(app);
   brakefit::cli::add_events_command(app);
+  brakefit::cli::add_gap_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

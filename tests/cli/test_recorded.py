@@ -161,3 +161,39 @@ class CanUtilsCompatibility(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class Gap(unittest.TestCase):
+    def test_json_and_report_on_the_shipped_roller_runs(self):
+        with tempfile.TemporaryDirectory() as d:
+            runs = sorted(glob.glob(os.path.join(REC, "roller_2p2bar_*.log")))
+            r = run("gap", "--json", "--report", d, *runs)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            doc = json.loads(r.stdout)
+            self.assertEqual(doc["schema"], "brakefit.gap/1")
+            self.assertTrue(doc["model_hash"].startswith("sha256:"))
+            self.assertIsInstance(doc["verdict"], list)
+            self.assertEqual(len(doc["runs"]), 3)
+            names = {e["name"] for e in doc["effects"]}
+            for required in ("relaxation_length", "time_offset", "wheel_inertia", "brake_threshold",
+                             "slip_offset", "load_transfer", "speed_friction"):
+                self.assertIn(required, names)
+            for e in doc["effects"]:
+                self.assertAlmostEqual(e["gain"], 1 - e["heldout_rmse_after_n"] / e["heldout_rmse_before_n"], 9)
+            # The recordings were simulated with a 0.2 m relaxation length: it is accepted first,
+            # with the right magnitude, and the gap shrinks on withheld runs.
+            self.assertEqual(doc["verdict"][0], "relaxation_length")
+            relax = next(e for e in doc["effects"] if e["name"] == "relaxation_length")
+            self.assertTrue(relax["accepted"])
+            self.assertAlmostEqual(relax["params"]["sigma_m"], 0.2, delta=0.05)
+            self.assertIn("sigma_m", doc["parameters_after"])
+            self.assertLess(doc["gap_after_rmse_n"], 0.5 * doc["gap_before_rmse_n"])
+            self.assertAlmostEqual(sum(w["share"] for w in doc["where"] if not ":" in w["region"]), 1.0, 6)
+            for f in ("index.html", "residual.svg", "curves.svg", "gap.json"):
+                self.assertTrue(os.path.exists(os.path.join(d, f)), f)
+            self.assertEqual(len(svg_series(os.path.join(d, "residual.svg"))[1]), 3)
+
+    def test_one_run_is_not_enough(self):
+        r = run("gap", os.path.join(REC, "roller_2p2bar_fast.log"))
+        self.assertEqual(r.returncode, 65)
+        self.assertIn("at least two runs", r.stderr)

@@ -1,0 +1,248 @@
+// brakefit gap RUNS...: the sim-to-real gap of the Magic Formula on measured runs (core/gap):
+// where the residual lies, which unmodelled effect explains it, how far it shrinks on withheld
+// runs. JSON brakefit.gap/1 and an HTML report with the residual map and before/after curves.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "brakefit/version.hpp"
+#include "cli/commands.hpp"
+#include "cli/io.hpp"
+#include "cli/recording.hpp"
+#include "core/event_json.hpp"
+#include "core/gap/gap.hpp"
+#include "core/plot/svg.hpp"
+
+namespace brakefit::cli {
+
+namespace {
+
+nlohmann::ordered_json params_json(const gap::Fit& f, const std::vector<gap::Effect>& effects) {
+  nlohmann::ordered_json j;
+  const char* names[4] = {"B", "C", "D", "E"};
+  nlohmann::ordered_json se;
+  for (std::size_t i = 0; i < f.params.size(); ++i) {
+    const std::string name = i < 4 ? names[i] : gap::effect_param(effects[i - 4]).name;
+    j[name] = num(f.params[i]);
+    se[name] = i < f.stderr_.size() ? num(f.stderr_[i]) : nullptr;
+  }
+  j["stderr"] = se;
+  return j;
+}
+
+nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::Run>& runs,
+                                   const std::string& model_hash) {
+  nlohmann::ordered_json j;
+  j["schema"] = "brakefit.gap/1";
+  j["version"] = kVersion;
+  j["model_hash"] =
+      model_hash.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(model_hash);
+  j["mode"] = "model_vs_measurement";
+  j["runs"] = nlohmann::ordered_json::array();
+  for (const auto& run : runs) j["runs"].push_back(run.name);
+  j["verdict"] = r.verdict;
+  j["effects"] = nlohmann::ordered_json::array();
+  for (const auto& e : r.effects) {
+    nlohmann::ordered_json x;
+    x["name"] = gap::to_string(e.effect);
+    nlohmann::ordered_json p;
+    for (const auto& [k, v] : e.params) p[k] = num(v);
+    x["params"] = p;
+    x["heldout_rmse_before_n"] = num(e.heldout_rmse_before_n);
+    x["heldout_rmse_after_n"] = num(e.heldout_rmse_after_n);
+    x["gain"] = num(e.gain);
+    x["delta_bic"] = num(e.delta_bic);
+    x["accepted"] = e.accepted;
+    j["effects"].push_back(x);
+  }
+  j["where"] = nlohmann::ordered_json::array();
+  for (const auto& w : r.where)
+    j["where"].push_back(
+        {{"region", w.region}, {"rms_residual_n", num(w.rms_residual_n)}, {"share", num(w.share)}});
+  j["noise_n"] = num(r.noise_n);
+  j["gap_before_rmse_n"] = num(r.gap_before_rmse_n);
+  j["gap_after_rmse_n"] = num(r.gap_after_rmse_n);
+  j["fraction_explained"] =
+      num(r.gap_before_rmse_n > 0 ? 1.0 - r.gap_after_rmse_n / r.gap_before_rmse_n : 0.0);
+  j["parameters_before"] = params_json(r.before, {});
+  j["parameters_after"] = params_json(r.after, r.accepted);
+  j["notes"] = r.notes;
+  return j;
+}
+
+void write_report(const std::string& dir, const gap::Report& r, const std::vector<gap::Run>& runs,
+                  const nlohmann::ordered_json& doc) {
+  std::filesystem::create_directories(dir);
+  // Residual map: baseline residual against slip, one series per run.
+  plot::XyChart res{"Residual of the 4-parameter fit (measured - model)",
+                    "slip [%]",
+                    "residual [N]",
+                    {},
+                    800,
+                    450};
+  plot::XyChart curves{
+      "Measured runs, baseline and corrected model", "slip [%]", "brake force [N]", {}, 800, 500};
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const auto& run = runs[k];
+    const auto before = gap::predict(run, r.before.params, {});
+    const auto after = gap::predict(run, r.after.params, r.accepted);
+    plot::Series s{run.name, {}, {}, true, plot::series_color(k)};
+    plot::Series m{run.name + " measured", {}, {}, true, plot::series_color(k)};
+    plot::Series b{run.name + " baseline", {}, {}, false, plot::series_color(k), true};
+    plot::Series a{run.name + " corrected", {}, {}, false, plot::series_color(k)};
+    for (std::size_t i = 0; i < run.slip.size(); ++i) {
+      const double x = 100 * run.slip[i];
+      s.x.push_back(x);
+      s.y.push_back(run.force_n[i] - before[i]);
+      m.x.push_back(x);
+      m.y.push_back(run.force_n[i]);
+      b.x.push_back(x);
+      b.y.push_back(before[i]);
+      a.x.push_back(x);
+      a.y.push_back(after[i]);
+    }
+    res.series.push_back(std::move(s));
+    curves.series.push_back(std::move(m));
+    curves.series.push_back(std::move(b));
+    if (!r.accepted.empty()) curves.series.push_back(std::move(a));
+  }
+  write_file(dir + "/residual.svg", plot::render_svg(res));
+  write_file(dir + "/curves.svg", plot::render_svg(curves));
+  write_file(dir + "/gap.json", doc.dump(2) + "\n");
+  std::string rows;
+  for (const auto& e : doc["effects"])
+    rows += fmt::format(
+        "<tr{}><td>{}</td><td>{}</td><td>{:.1f}</td><td>{:.1f}</td><td>{:.3f}</td><td>{:.1f}</td>"
+        "<td>{}</td></tr>\n",
+        e["accepted"].get<bool>() ? " class=\"ok\"" : "", e["name"].get<std::string>(),
+        plot::xml_escape(e["params"].dump()), e["heldout_rmse_before_n"].get<double>(),
+        e["heldout_rmse_after_n"].get<double>(), e["gain"].get<double>(),
+        e["delta_bic"].get<double>(), e["accepted"].get<bool>() ? "yes" : "no");
+  std::string where;
+  for (const auto& w : r.where)
+    where += fmt::format("<tr><td>{}</td><td>{:.1f}</td><td>{:.1f} %</td></tr>\n",
+                         plot::xml_escape(w.region), w.rms_residual_n, 100 * w.share);
+  std::string notes;
+  for (const auto& n : r.notes) notes += "<li>" + plot::xml_escape(n) + "</li>\n";
+  const std::string html = fmt::format(
+      R"(<!doctype html>
+<html><head><meta charset="utf-8"><title>brakefit gap report</title>
+<style>body{{font-family:sans-serif;max-width:900px;margin:2em auto}}table{{border-collapse:collapse}}
+td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}td:first-child{{text-align:left}}
+tr.ok{{background:#e6f4e6}}</style></head><body>
+<h1>Sim-to-real gap: model vs measurement</h1>
+<p>Runs: {}</p>
+<h2>Verdict: {}</h2>
+<p>Held-out gap (leave one run out): <b>{:.1f} N</b> before, <b>{:.1f} N</b> after ({:.0f} % explained);
+force noise {:.1f} N.</p>
+<ul>{}</ul>
+<h2>Which effect (each candidate alone on the baseline, then forward selection)</h2>
+<table><tr><th>effect</th><th>parameters</th><th>held-out before [N]</th><th>after [N]</th><th>gain</th><th>ΔBIC</th><th>accepted</th></tr>
+{}</table>
+<h2>Where the baseline misses</h2>
+<table><tr><th>region</th><th>RMS residual [N]</th><th>share of squared residual</th></tr>
+{}</table>
+<h2>Residual map</h2><img src="residual.svg" alt="residual map">
+<h2>Before and after</h2><img src="curves.svg" alt="curves">
+<p>JSON: <a href="gap.json">gap.json</a> (brakefit.gap/1, brakefit {})</p>
+</body></html>
+)",
+      plot::xml_escape(
+          fmt::format("{}", fmt::join(doc["runs"].get<std::vector<std::string>>(), ", "))),
+      plot::xml_escape(fmt::format("{}", fmt::join(r.verdict, ", "))), r.gap_before_rmse_n,
+      r.gap_after_rmse_n,
+      r.gap_before_rmse_n > 0 ? 100 * (1 - r.gap_after_rmse_n / r.gap_before_rmse_n) : 0.0,
+      r.noise_n, notes, rows, where, kVersion);
+  write_file(dir + "/index.html", html);
+}
+
+}  // namespace
+
+void add_gap_command(CLI::App& app) {
+  struct Opts {
+    std::vector<std::string> files;
+    std::string report, force = "pressure", model;
+    bool json = false;
+    RunOptions run;
+    gap::Options gap;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = app.add_subcommand(
+      "gap",
+      "Diagnose the gap between the Magic Formula and measured runs (which effect, how much)");
+  cmd->add_option("runs", o->files, "candump logs or event CSVs of one bench (several ramp rates)")
+      ->required();
+  cmd->add_flag("--json", o->json, "print the brakefit.gap/1 document");
+  cmd->add_option("--report", o->report, "directory for index.html, residual.svg, curves.svg");
+  cmd->add_option("--bench", o->run.bench_file, "bench calibration TOML for candump logs");
+  cmd->add_option("--force", o->force, "pressure or tester")
+      ->check(CLI::IsMember({"pressure", "tester"}))
+      ->capture_default_str();
+  cmd->add_option("--model", o->model, "model for the start values (default: the shipped one)");
+  cmd->add_option("--gate-gain", o->gap.gate_gain, "minimum held-out gain to accept an effect")
+      ->capture_default_str();
+  cmd->add_option("--bic-margin", o->gap.bic_margin, "minimum BIC decrease to accept an effect")
+      ->capture_default_str();
+  cmd->callback([o] {
+    const Model model = load_model(resolve_model_path(o->model));
+    o->run.pipeline.fit = false;
+    gap::ConditionOptions co;
+    co.force =
+        o->force == "tester" ? pipeline::ForceSource::Tester : pipeline::ForceSource::Pressure;
+    o->run.pipeline.force = co.force;
+    std::vector<gap::Run> runs;
+    Curve pooled;
+    for (const auto& f : o->files) {
+      const Run run = process_run(f, o->run, nullptr);
+      for (const auto& e : run.events) {
+        if (!e.event.fittable()) {
+          spdlog::warn("{}: event {} skipped ({})", f, e.event.event_id, e.event.end_reason);
+          continue;
+        }
+        const std::string name =
+            fmt::format("{}#{}", std::filesystem::path(f).stem().string(), e.event.event_id);
+        runs.push_back(gap::condition(name, e.event, run.calibration, co));
+        pooled.slip_ratio.insert(pooled.slip_ratio.end(), e.curve.slip_ratio.begin(),
+                                 e.curve.slip_ratio.end());
+        pooled.force_n.insert(pooled.force_n.end(), e.curve.force_n.begin(), e.curve.force_n.end());
+      }
+    }
+    if (runs.size() < 2)
+      throw ExitError(
+          kExitDataError,
+          fmt::format("gap: {} usable brake event(s); at least two runs are needed (each "
+                      "effect is checked on a run it was not fitted to)",
+                      runs.size()));
+    spdlog::info("gap: {} runs, seeding the baseline with the hybrid fit of the pooled points",
+                 runs.size());
+    const MethodResult seed = run_method(Method::Hybrid, &model, pooled, fit_options_for(&model));
+    const gap::Report rep = gap::diagnose(runs, seed.params, o->gap);
+    const auto doc = report_json(rep, runs, model.hash);
+    if (!o->report.empty()) {
+      write_report(o->report, rep, runs, doc);
+      spdlog::info("report written to {}/index.html", o->report);
+    }
+    if (o->json) {
+      std::cout << doc.dump() << "\n";
+      return;
+    }
+    std::cout << fmt::format("verdict: {}\n", fmt::join(rep.verdict, ", "));
+    std::cout << fmt::format(
+        "held-out gap {:.1f} N -> {:.1f} N ({:.0f} % explained), force noise {:.1f} N\n",
+        rep.gap_before_rmse_n, rep.gap_after_rmse_n,
+        rep.gap_before_rmse_n > 0 ? 100 * (1 - rep.gap_after_rmse_n / rep.gap_before_rmse_n) : 0.0,
+        rep.noise_n);
+    for (const auto& e : rep.effects) {
+      std::string ps;
+      for (const auto& [k, v] : e.params) ps += fmt::format("{} {:.4g} ", k, v);
+      std::cout << fmt::format("  {:<18} {:<32} gain {:>6.3f}  dBIC {:>8.1f}  {}\n",
+                               gap::to_string(e.effect), ps, e.gain, e.delta_bic,
+                               e.accepted ? "accepted" : "");
+    }
+    for (const auto& n : rep.notes) std::cout << "note: " << n << "\n";
+  });
+}
+
+}  // namespace brakefit::cli
