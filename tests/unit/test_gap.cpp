@@ -5,6 +5,7 @@
 
 #include "core/gap/gap.hpp"
 #include "core/pipeline/pipeline.hpp"
+#include "sim/referee.hpp"
 #include "sim/simulator.hpp"
 #include "tests/unit/sim_test_util.hpp"
 
@@ -87,4 +88,32 @@ TEST(Gap, BrakeThresholdIsFoundWithItsMagnitude) {
     }
   }
   EXPECT_LT(r.gap_after_rmse_n, 0.15 * r.gap_before_rmse_n);
+}
+
+// A small subset of the blinded-injection referee (bench/gap_referee runs >= 200 trials).
+TEST(GapReferee, StrongInjectionsAreNamedWithTheirMagnitude) {
+  sim::Scenario base = scenario("ideal_roller");
+  base.effects.pressure_noise_bar = 0.05;
+  for (const sim::Injection& inj :
+       {sim::Injection{"relaxation_length", 0.3}, sim::Injection{"time_offset", 0.04}}) {
+    const auto t = sim::run_trial(base, inj, 7, gap::Options{});
+    ASSERT_FALSE(t.verdict.empty()) << inj.effect;
+    EXPECT_EQ(t.verdict.front(), inj.effect);
+    EXPECT_TRUE(t.correct());
+    EXPECT_NEAR(t.estimate, inj.magnitude, 0.25 * inj.magnitude) << inj.effect;
+    EXPECT_LT(t.gap_after_n, 0.5 * t.gap_before_n);
+  }
+}
+
+TEST(GapReferee, CalibratedGatesSitAboveEveryNullScoreAndDrawsCoverNone) {
+  sim::Scenario base = scenario("ideal_roller");
+  base.effects.pressure_noise_bar = 0.05;
+  const auto g = sim::calibrate_gates(base, 2, 1'000'000, gap::Options{});
+  ASSERT_EQ(g.null_best_gain.size(), 2u);
+  for (double x : g.null_best_gain) EXPECT_GT(g.options.gate_gain, x);
+  for (double x : g.null_best_delta_bic) EXPECT_LT(-g.options.bic_margin, x);  // not accepted
+  Rng rng(5);
+  int none = 0;
+  for (int i = 0; i < 400; ++i) none += sim::draw_injection(rng, 0.3).effect == "none";
+  EXPECT_NEAR(none / 400.0, 0.3, 0.07);
 }

@@ -1,0 +1,50 @@
+#pragma once
+// The blinded-injection referee of the gap diagnosis: draw an effect (or none) and a magnitude,
+// simulate a set of runs at three pedal ramp rates, hide the label, diagnose, score. Also the gate
+// calibration on null data (seeds disjoint from the referee's).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/gap/gap.hpp"
+#include "core/rng.hpp"
+#include "sim/scenario.hpp"
+
+namespace brakefit::sim {
+
+struct Injection {
+  std::string effect = "none";  ///< gap effect name, or "none"
+  double magnitude = 0.0;       ///< in the diagnosis parameter's unit (sigma_m, p0_bar, ...)
+};
+
+/// The effects the referee draws (besides none) and their magnitude ranges.
+const std::vector<std::string>& referee_effects();
+Injection draw_injection(Rng& rng, double p_none);
+/// The scenario with the injection switched on (everything else as in base).
+Scenario inject(Scenario base, const Injection& inj);
+/// Runs at the slow, medium and fast pedal ramps, conditioned for the diagnosis.
+std::vector<gap::Run> simulate_runs(const Scenario& s, std::uint64_t seed);
+
+/// Start values for the diagnosis: least squares on the pooled points of the runs.
+MfParams pooled_start(const std::vector<gap::Run>& runs);
+
+struct TrialResult {
+  Injection truth;
+  std::vector<std::string> verdict;
+  double estimate = 0.0;  ///< the injected effect's parameter when fitted alone (NaN for none)
+  double gap_before_n = 0.0, gap_after_n = 0.0, noise_n = 0.0;
+  bool correct() const;
+};
+TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t seed,
+                      const gap::Options& o);
+
+struct GateCalibration {
+  gap::Options options;
+  std::vector<double> null_best_gain, null_best_delta_bic;
+};
+/// Diagnoses n null sets (seeds seed0, seed0+1, ...) and sets the gates above what they show:
+/// gain gate = max(min_gain, 1.5 x the largest best-candidate gain), BIC margin likewise.
+GateCalibration calibrate_gates(const Scenario& base, int n, std::uint64_t seed0,
+                                const gap::Options& start);
+
+}  // namespace brakefit::sim
