@@ -54,7 +54,7 @@ double quantile(std::vector<double> v, double q) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int trials = 200, calib = 30;
+  int trials = 200, calib = 30, misspecified = 30;
   double null_share = 0.3;
   std::uint64_t seed = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
   std::map<std::string, std::map<std::string, int>> confusion;
   std::map<std::string, std::vector<double>> mag_err;
   std::vector<double> after_over_noise;
-  int correct = 0, correct_effects = 0, n_effects = 0, n_none = 0, fp_none = 0;
+  int correct = 0, correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0;
   for (int t = 0; t < trials; ++t) {
     const sim::Injection inj = sim::draw_injection(rng, null_share);
     const auto r =
@@ -114,12 +114,22 @@ int main(int argc, char** argv) {
     } else {
       ++n_effects;
       if (r.correct()) ++correct_effects;
+      if (r.exact()) ++exact_effects;
       if (std::isfinite(r.estimate))
         mag_err[inj.effect].push_back(std::abs(r.estimate - inj.magnitude) / inj.magnitude);
       if (r.correct()) after_over_noise.push_back(r.gap_after_n / std::max(r.noise_n, 1e-9));
     }
     if ((t + 1) % 20 == 0)
       std::cerr << fmt::format("  {}/{} trials, {} correct\n", t + 1, trials, correct);
+  }
+  // Misspecified tyre family (Burckhardt curve, no effect): must give none or unexplained.
+  int mis_ok = 0;
+  std::map<std::string, int> mis_said;
+  for (int t = 0; t < misspecified; ++t) {
+    const auto r = sim::run_trial(base, {"misspecified", 0.0},
+                                  500'000 + static_cast<std::uint64_t>(t), gates.options);
+    ++mis_said[r.verdict.empty() ? "?" : r.verdict.front()];
+    if (r.correct()) ++mis_ok;
   }
   std::vector<std::string> said_cols = labels;
   said_cols.push_back("unexplained");
@@ -141,6 +151,7 @@ int main(int argc, char** argv) {
   j["gate_gain"] = gates.options.gate_gain;
   j["bic_margin"] = gates.options.bic_margin;
   j["accuracy_effects"] = n_effects ? static_cast<double>(correct_effects) / n_effects : NAN;
+  j["accuracy_effects_exact"] = n_effects ? static_cast<double>(exact_effects) / n_effects : NAN;
   j["false_positive_rate_none"] = n_none ? static_cast<double>(fp_none) / n_none : NAN;
   for (const auto& [e, v] : mag_err) {
     const auto within = std::count_if(v.begin(), v.end(), [](double x) { return x <= 0.25; });
@@ -151,9 +162,20 @@ int main(int argc, char** argv) {
   }
   j["gap_after_over_noise"] = {{"median", quantile(after_over_noise, 0.5)},
                                {"p90", quantile(after_over_noise, 0.9)}};
+  j["misspecified_trials"] = misspecified;
+  j["misspecified_none_or_unexplained"] =
+      misspecified ? static_cast<double>(mis_ok) / misspecified : NAN;
+  j["misspecified_said"] = mis_said;
   std::cout << fmt::format(
-      "\neffects correct: {}/{} ({:.1f} %), false positives on none: {}/{} ({:.1f} %)\n",
-      correct_effects, n_effects, 100.0 * correct_effects / std::max(1, n_effects), fp_none, n_none,
+      "\nmisspecified tyre (Burckhardt): none/unexplained in {}/{}; first verdicts:", mis_ok,
+      misspecified);
+  for (const auto& [k, v] : mis_said) std::cout << fmt::format(" {} {}", k, v);
+  std::cout << fmt::format(
+      "\neffects correct: {}/{} ({:.1f} %; first verdict exactly the injected effect: {:.1f} %, "
+      "the rest named with it in a cannot-separate note), false positives on none: {}/{} ({:.1f} "
+      "%)\n",
+      correct_effects, n_effects, 100.0 * correct_effects / std::max(1, n_effects),
+      100.0 * exact_effects / std::max(1, n_effects), fp_none, n_none,
       100.0 * fp_none / std::max(1, n_none));
   std::cout << j.dump() << "\n";
   return 0;

@@ -31,9 +31,13 @@ MfParams pooled_start(const std::vector<gap::Run>& runs);
 struct TrialResult {
   Injection truth;
   std::vector<std::string> verdict;
+  std::vector<std::string> notes;  ///< "cannot separate A from B" notes of the diagnosis
   double estimate = 0.0;  ///< the injected effect's parameter when fitted alone (NaN for none)
   double gap_before_n = 0.0, gap_after_n = 0.0, noise_n = 0.0;
+  /// The first verdict is the injected effect, or the diagnosis named both in a "cannot
+  /// separate" note (an honest answer: the data do not tell them apart); none: exactly ["none"].
   bool correct() const;
+  bool exact() const;  ///< the first verdict is the injected effect (or ["none"])
 };
 TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t seed,
                       const gap::Options& o);

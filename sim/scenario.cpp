@@ -119,9 +119,14 @@ Scenario parse_scenario(std::string_view text, const std::string& source) {
   if (const auto* t = rd.table(root, "", "tyre")) {
     const std::string p = "tyre.";
     rd.check_keys(*t, p,
-                  {"FNOMIN", "NOMPRES_bar", "PCX1", "PDX1", "PDX2", "PEX1", "PEX2", "PEX3", "PEX4",
-                   "PKX1", "PKX2", "PKX3", "PPX1", "PPX2", "PPX3", "PPX4"});
+                  {"family", "FNOMIN", "NOMPRES_bar", "PCX1", "PDX1", "PDX2", "PEX1", "PEX2",
+                   "PEX3", "PEX4", "PKX1", "PKX2", "PKX3", "PPX1", "PPX2", "PPX3", "PPX4"});
     auto& ty = s.tyre;
+    const std::string family = rd.string(*t, p, "family", "magic_formula");
+    if (family == "burckhardt")
+      ty.family = TyreMf61::Family::Burckhardt;
+    else if (family != "magic_formula")
+      rd.fail(p + "family", "expected 'magic_formula' or 'burckhardt'");
     ty.FNOMIN = rd.number(*t, p, "FNOMIN", ty.FNOMIN, 100, 1e5);
     ty.NOMPRES_bar = rd.number(*t, p, "NOMPRES_bar", ty.NOMPRES_bar, 0.5, 10);
     ty.PCX1 = rd.number(*t, p, "PCX1", ty.PCX1, 1.0, 2.0);

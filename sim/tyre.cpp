@@ -32,6 +32,12 @@ Coeffs coeffs(const TyreMf61& t, const TyreState& s, double sgn_kappa_x) {
 }  // namespace
 
 double fx_mf61(const TyreMf61& t, const TyreState& s, double kappa) {
+  if (t.family == TyreMf61::Family::Burckhardt) {
+    const double a = std::abs(kappa);
+    const double mu =
+        t.BURCKHARDT_C1 * (1.0 - std::exp(-t.BURCKHARDT_C2 * a)) - t.BURCKHARDT_C3 * a;
+    return (kappa < 0 ? -1.0 : 1.0) * s.fz_n * s.lambda_mu * mu;
+  }
   const TyreState s0 = s;
   const double sh = s.shifts ? t.PHX1 + t.PHX2 * (s.fz_n - t.FNOMIN) / t.FNOMIN : 0.0;
   const double kx = kappa + sh;

@@ -6,6 +6,10 @@
 namespace brakefit::sim {
 
 struct TyreMf61 {
+  /// Burckhardt: mu(s) = c1 (1 - exp(-c2 s)) - c3 s (dry asphalt), a friction curve that is not a
+  /// Magic Formula: the gap diagnosis must not invent an effect for it (misspecified tyre).
+  enum class Family { MagicFormula, Burckhardt } family = Family::MagicFormula;
+  double BURCKHARDT_C1 = 1.2801, BURCKHARDT_C2 = 23.99, BURCKHARDT_C3 = 0.52;
   double FNOMIN = 4000.0;    ///< N
   double NOMPRES_bar = 2.2;  ///< 220 kPa
   double LONGVL = 16.7;      ///< m/s

@@ -87,6 +87,9 @@ double interp(const std::vector<double>& t, const std::vector<double>& x, double
 
 }  // namespace
 
+/// A lock-up runaway starts past the linear region: jumps below this slip are noise.
+constexpr double kRunawayMinSlip = 0.05;
+
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o) {
   Run full;
@@ -105,6 +108,24 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     v_wheel.push_back(s.v_wheel_mps);
     pressure.push_back(s.pressure_bar);
     full.force_n.push_back(f);
+  }
+  // The lock-up runaway: past the peak a wheel can lose speed within one or two frames. There the
+  // slip is measured across a single frame and the force is dominated by the wheel's deceleration
+  // (I a / R^2, a numerical derivative of a step): not quasi-static data. The run is cut where
+  // the slip first jumps by more than runaway_slip_per_sample between two samples.
+  if (o.runaway_slip_per_sample > 0) {
+    for (std::size_t i = 1; i < v_wheel.size(); ++i) {
+      const double s0 = 1.0 - v_wheel[i - 1] / full.v_ref_mps[i - 1];
+      const double s1 = 1.0 - v_wheel[i] / full.v_ref_mps[i];
+      if (s0 > kRunawayMinSlip && s1 - s0 > o.runaway_slip_per_sample) {
+        full.t_s.resize(i);
+        full.v_ref_mps.resize(i);
+        v_wheel.resize(i);
+        pressure.resize(i);
+        full.force_n.resize(i);
+        break;
+      }
+    }
   }
   if (full.t_s.size() < 20)
     throw InputError(fmt::format("{}: too few samples for a diagnosis", name));
@@ -284,6 +305,11 @@ double rmse(const Run& r, const std::vector<double>& params, const std::vector<E
 
 namespace {
 
+bool at_bound(double v, double lo, double hi) {
+  const double tol = 0.005 * (hi - lo);
+  return v <= lo + tol || v >= hi - tol;
+}
+
 /// Leave-one-run-out: RMS over runs of the held-out RMSE with parameters fitted on the others.
 double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects,
                const MfParams& start) {
@@ -318,7 +344,6 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
   const MfParams base{
       rep.before.params[0], rep.before.params[1], rep.before.params[2], rep.before.params[3], 0, 0};
   rep.gap_before_rmse_n = heldout(runs, {}, base);
-
   // Where: baseline residual by slip region, by phase, by run.
   const double peak_slip = mf_peak(base, 1.0).slip_ratio;
   std::vector<std::pair<std::string, double>> acc;
@@ -383,6 +408,14 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
               [&](std::size_t a, std::size_t b) { return scores[a].gain > scores[b].gain; });
     EffectScore& best = scores[order[0]];
     best.accepted = best.gain >= o.gate_gain && best.delta_bic <= -o.bic_margin;
+    const EffectParam bp = effect_param(best.effect);
+    if (best.accepted && at_bound(fits[order[0]].params.back(), bp.lo, bp.hi)) {
+      best.accepted = false;
+      rep.notes.push_back(
+          fmt::format("{} would explain part of the residual only with {} at the "
+                      "end of its physical range ({:.4g}): not accepted",
+                      to_string(best.effect), bp.name, fits[order[0]].params.back()));
+    }
     if (order.size() > 1) {
       const EffectScore& second = scores[order[1]];
       const bool both_pass = second.gain >= o.gate_gain && second.delta_bic <= -o.bic_margin;
@@ -398,6 +431,23 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
     chosen.push_back(best.effect);
     current_heldout = best.heldout_rmse_after_n;
     current_fit = fits[order[0]];
+  }
+  // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
+  // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
+  double first = 0.0;
+  for (const auto& e : rep.effects)
+    if (!chosen.empty() && e.effect == chosen.front()) first = e.gain;
+  if (!chosen.empty() && current_heldout > o.noise_factor * rep.noise_n &&
+      first < o.min_first_gain) {
+    rep.notes.push_back(fmt::format(
+        "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are left "
+        "against {:.1f} N of noise: the residual has a structure no candidate explains (is the "
+        "curve a Magic Formula?), so no effect is named",
+        to_string(chosen.front()), 100 * first, current_heldout, rep.noise_n));
+    for (auto& e : rep.effects) e.accepted = false;
+    chosen.clear();
+    current_fit = rep.before;
+    current_heldout = rep.gap_before_rmse_n;
   }
   rep.accepted = chosen;
   rep.after = current_fit;

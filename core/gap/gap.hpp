@@ -48,6 +48,9 @@ struct Run {
 struct ConditionOptions {
   int smooth_half_window = 10;   ///< zero-phase centred moving average of slip and speeds (samples)
   std::size_t max_points = 400;  ///< decimation for fitting
+  /// Cut the run at the lock-up runaway: the first slip jump larger than this between two
+  /// samples (0: keep everything).
+  double runaway_slip_per_sample = 0.01;
   pipeline::ForceSource force = pipeline::ForceSource::Pressure;
 };
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
@@ -73,6 +76,10 @@ struct Options {
   double bic_margin = 10.0;     ///< minimum BIC decrease
   double noise_factor = 1.5;    ///< held-out RMSE above noise_factor x noise = a gap is left
   std::size_t max_effects = 3;  ///< forward selection depth
+  /// When a gap above noise_factor x noise is left, the first accepted effect must have had at
+  /// least this held-out gain, else none is named (fit-quality check: a curve that is not a Magic
+  /// Formula makes every candidate nibble at the residual; a real effect takes a large bite).
+  double min_first_gain = 0.4;
   double separability =
       0.15;  ///< two candidates whose gains differ less than this are "not separable"
 };

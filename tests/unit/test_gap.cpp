@@ -117,3 +117,17 @@ TEST(GapReferee, CalibratedGatesSitAboveEveryNullScoreAndDrawsCoverNone) {
   for (int i = 0; i < 400; ++i) none += sim::draw_injection(rng, 0.3).effect == "none";
   EXPECT_NEAR(none / 400.0, 0.3, 0.07);
 }
+
+TEST(GapReferee, NullSaysNoneAndAMisspecifiedTyreInventsNoEffect) {
+  sim::Scenario base = scenario("ideal_roller");
+  base.effects.pressure_noise_bar = 0.05;
+  base.wheel_inertia_kgm2 = 0.005;  // below the noise: the null of bench/gap_referee
+  const auto null = sim::run_trial(base, {}, 11, gap::Options{});
+  EXPECT_EQ(null.verdict, std::vector<std::string>{"none"});
+  EXPECT_LT(null.gap_before_n, 1.5 * null.noise_n);
+  // A Burckhardt friction curve is not a Magic Formula: none or unexplained, never an effect.
+  const auto mis = sim::run_trial(base, {"misspecified", 0.0}, 12, gap::Options{});
+  ASSERT_FALSE(mis.verdict.empty());
+  EXPECT_TRUE(mis.correct()) << mis.verdict.front();
+  EXPECT_EQ(mis.verdict.front(), "unexplained");
+}
