@@ -33,13 +33,13 @@ nlohmann::ordered_json params_json(const gap::Fit& f, const std::vector<gap::Eff
 }
 
 nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::Run>& runs,
-                                   const std::string& model_hash) {
+                                   const std::string& model_hash, const std::string& mode) {
   nlohmann::ordered_json j;
   j["schema"] = "brakefit.gap/1";
   j["version"] = kVersion;
   j["model_hash"] =
       model_hash.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(model_hash);
-  j["mode"] = "model_vs_measurement";
+  j["mode"] = mode;
   j["runs"] = nlohmann::ordered_json::array();
   for (const auto& run : runs) j["runs"].push_back(run.name);
   j["verdict"] = r.verdict;
@@ -132,7 +132,7 @@ void write_report(const std::string& dir, const gap::Report& r, const std::vecto
 <style>body{{font-family:sans-serif;max-width:900px;margin:2em auto}}table{{border-collapse:collapse}}
 td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}td:first-child{{text-align:left}}
 tr.ok{{background:#e6f4e6}}</style></head><body>
-<h1>Sim-to-real gap: model vs measurement</h1>
+<h1>Sim-to-real gap: {}</h1>
 <p>Runs: {}</p>
 <h2>Verdict: {}</h2>
 <p>Held-out gap (leave one run out): <b>{:.1f} N</b> before, <b>{:.1f} N</b> after ({:.0f} % explained);
@@ -149,6 +149,8 @@ force noise {:.1f} N.</p>
 <p>JSON: <a href="gap.json">gap.json</a> (brakefit.gap/1, brakefit {})</p>
 </body></html>
 )",
+      doc["mode"] == "roller_vs_road" ? "the roller fit predicting the road runs"
+                                      : "model vs measurement",
       plot::xml_escape(
           fmt::format("{}", fmt::join(doc["runs"].get<std::vector<std::string>>(), ", "))),
       plot::xml_escape(fmt::format("{}", fmt::join(r.verdict, ", "))), r.gap_before_rmse_n,
@@ -162,7 +164,7 @@ force noise {:.1f} N.</p>
 
 void add_gap_command(CLI::App& app) {
   struct Opts {
-    std::vector<std::string> files;
+    std::vector<std::string> files, roller, road;
     std::string report, force = "pressure", model;
     bool json = false;
     RunOptions run;
@@ -172,8 +174,11 @@ void add_gap_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "gap",
       "Diagnose the gap between the Magic Formula and measured runs (which effect, how much)");
-  cmd->add_option("runs", o->files, "candump logs or event CSVs of one bench (several ramp rates)")
-      ->required();
+  cmd->add_option("runs", o->files, "candump logs or event CSVs of one bench (several ramp rates)");
+  cmd->add_option("--roller", o->roller, "bench vs bench: the roller runs (fitted)");
+  cmd->add_option("--road", o->road,
+                  "bench vs bench: the road runs (predicted from the roller fit; transfer effects "
+                  "ranked by held-out error)");
   cmd->add_flag("--json", o->json, "print the brakefit.gap/1 document");
   cmd->add_option("--report", o->report, "directory for index.html, residual.svg, curves.svg");
   cmd->add_option("--bench", o->run.bench_file, "bench calibration TOML for candump logs");
@@ -192,34 +197,44 @@ void add_gap_command(CLI::App& app) {
     co.force =
         o->force == "tester" ? pipeline::ForceSource::Tester : pipeline::ForceSource::Pressure;
     o->run.pipeline.force = co.force;
-    std::vector<gap::Run> runs;
+    const bool transfer = !o->roller.empty() || !o->road.empty();
+    if (transfer && (o->roller.empty() || o->road.empty() || !o->files.empty()))
+      throw ExitError(kExitConfig, "gap: give either RUNS, or both --roller RUNS and --road RUNS");
+    if (!transfer && o->files.empty())
+      throw ExitError(kExitConfig, "gap: no runs given (RUNS, or --roller and --road)");
     Curve pooled;
-    for (const auto& f : o->files) {
-      const Run run = process_run(f, o->run, nullptr);
-      for (const auto& e : run.events) {
-        if (!e.event.fittable()) {
-          spdlog::warn("{}: event {} skipped ({})", f, e.event.event_id, e.event.end_reason);
-          continue;
+    auto load = [&](const std::vector<std::string>& files, bool pool) {
+      std::vector<gap::Run> runs;
+      for (const auto& f : files) {
+        const Run run = process_run(f, o->run, nullptr);
+        for (const auto& e : run.events) {
+          if (!e.event.fittable()) {
+            spdlog::warn("{}: event {} skipped ({})", f, e.event.event_id, e.event.end_reason);
+            continue;
+          }
+          const std::string name =
+              fmt::format("{}#{}", std::filesystem::path(f).stem().string(), e.event.event_id);
+          runs.push_back(gap::condition(name, e.event, run.calibration, co));
+          if (!pool) continue;
+          pooled.slip_ratio.insert(pooled.slip_ratio.end(), e.curve.slip_ratio.begin(),
+                                   e.curve.slip_ratio.end());
+          pooled.force_n.insert(pooled.force_n.end(), e.curve.force_n.begin(),
+                                e.curve.force_n.end());
         }
-        const std::string name =
-            fmt::format("{}#{}", std::filesystem::path(f).stem().string(), e.event.event_id);
-        runs.push_back(gap::condition(name, e.event, run.calibration, co));
-        pooled.slip_ratio.insert(pooled.slip_ratio.end(), e.curve.slip_ratio.begin(),
-                                 e.curve.slip_ratio.end());
-        pooled.force_n.insert(pooled.force_n.end(), e.curve.force_n.begin(), e.curve.force_n.end());
       }
-    }
-    if (runs.size() < 2)
-      throw ExitError(
-          kExitDataError,
-          fmt::format("gap: {} usable brake event(s); at least two runs are needed (each "
-                      "effect is checked on a run it was not fitted to)",
-                      runs.size()));
+      return runs;
+    };
+    std::vector<gap::Run> roller_runs;
+    std::vector<gap::Run> runs = transfer ? load(o->road, false) : load(o->files, true);
+    if (transfer) roller_runs = load(o->roller, true);
     spdlog::info("gap: {} runs, seeding the baseline with the hybrid fit of the pooled points",
                  runs.size());
     const MethodResult seed = run_method(Method::Hybrid, &model, pooled, fit_options_for(&model));
-    const gap::Report rep = gap::diagnose(runs, seed.params, o->gap);
-    const auto doc = report_json(rep, runs, model.hash);
+    const gap::Report rep = transfer
+                                ? gap::diagnose_transfer(roller_runs, runs, seed.params, o->gap)
+                                : gap::diagnose(runs, seed.params, o->gap);
+    const auto doc =
+        report_json(rep, runs, model.hash, transfer ? "roller_vs_road" : "model_vs_measurement");
     if (!o->report.empty()) {
       write_report(o->report, rep, runs, doc);
       spdlog::info("report written to {}/index.html", o->report);

@@ -27,6 +27,8 @@ const char* to_string(Effect e) {
       return "load_transfer";
     case Effect::SpeedFriction:
       return "speed_friction";
+    case Effect::RollerFriction:
+      return "roller_friction";
   }
   return "?";
 }
@@ -47,6 +49,8 @@ EffectParam effect_param(Effect e) {
       return {"dfz_per_decel_s2_per_m", -0.2, 0.2, 0.0};
     case Effect::SpeedFriction:
       return {"lambda_mu_v", 0.0, 20.0, 0.1};
+    case Effect::RollerFriction:
+      return {"mu_ratio", 0.3, 2.0, 1.0};
   }
   return {"?", 0, 0, 0};
 }
@@ -210,6 +214,9 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
         for (std::size_t i = 0; i < n; ++i)
           d_scale[i] /= 1.0 + q * std::abs(r.slip[i]) * r.v_ref_mps[i] / kLongVl;
         break;
+      case Effect::RollerFriction:  // the other surface's friction: D scales
+        for (double& d : d_scale) d *= q;
+        break;
     }
   }
   std::vector<double> f(n);
@@ -231,8 +238,9 @@ namespace {
 
 class GapProblem final : public fit::LeastSquaresProblem {
  public:
-  GapProblem(const std::vector<const Run*>& runs, const std::vector<Effect>& effects)
-      : runs_(runs), effects_(effects) {
+  GapProblem(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
+             std::vector<double> fixed_base = {})
+      : runs_(runs), effects_(effects), base_(std::move(fixed_base)) {
     for (const Run* r : runs_) n_ += static_cast<Eigen::Index>(r->t_s.size());
   }
   Eigen::Index residual_count() const override { return n_; }
@@ -253,7 +261,8 @@ class GapProblem final : public fit::LeastSquaresProblem {
 
  private:
   void residuals(const Eigen::VectorXd& x, Eigen::VectorXd& res) const {
-    const std::vector<double> p(x.data(), x.data() + x.size());
+    std::vector<double> p = base_;  // empty unless B, C, D, E are held
+    p.insert(p.end(), x.data(), x.data() + x.size());
     Eigen::Index o = 0;
     for (const Run* r : runs_) {
       const auto f = predict(*r, p, effects_);
@@ -262,6 +271,7 @@ class GapProblem final : public fit::LeastSquaresProblem {
   }
   const std::vector<const Run*>& runs_;
   const std::vector<Effect>& effects_;
+  std::vector<double> base_;
   Eigen::Index n_ = 0;
 };
 
@@ -296,6 +306,43 @@ Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& eff
   return out;
 }
 
+Fit fit_effects(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
+                const MfParams& base) {
+  const std::vector<double> b{base.B, base.C, base.D, base.E};
+  Fit out;
+  out.params = b;
+  out.stderr_.assign(4, NAN);
+  std::size_t n = 0;
+  for (const Run* r : runs) n += r->t_s.size();
+  out.points = n;
+  if (effects.empty()) {
+    for (const Run* r : runs) {
+      const auto f = predict(*r, b, {});
+      for (std::size_t i = 0; i < f.size(); ++i)
+        out.ssr += (f[i] - r->force_n[i]) * (f[i] - r->force_n[i]);
+    }
+    return out;
+  }
+  const auto np = static_cast<Eigen::Index>(effects.size());
+  Eigen::VectorXd lo(np), hi(np), x0(np);
+  for (std::size_t k = 0; k < effects.size(); ++k) {
+    const EffectParam ep = effect_param(effects[k]);
+    const auto i = static_cast<Eigen::Index>(k);
+    lo(i) = ep.lo;
+    hi(i) = ep.hi;
+    x0(i) = ep.start;
+  }
+  GapProblem problem(runs, effects, b);
+  fit::LmOptions lm;
+  lm.max_iterations = 100;
+  const fit::LmResult r = fit::minimize(problem, x0, lo, hi, lm);
+  out.params.insert(out.params.end(), r.x.data(), r.x.data() + r.x.size());
+  out.stderr_.insert(out.stderr_.end(), r.standard_errors.data(),
+                     r.standard_errors.data() + r.standard_errors.size());
+  out.ssr = r.ssr;
+  return out;
+}
+
 double rmse(const Run& r, const std::vector<double>& params, const std::vector<Effect>& effects) {
   const auto f = predict(r, params, effects);
   double s = 0;
@@ -325,6 +372,46 @@ double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects,
   return std::sqrt(sq / static_cast<double>(runs.size()));
 }
 
+/// Where: residual of the 4-parameter model by slip region, by phase, by run.
+std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params) {
+  const MfParams base{params[0], params[1], params[2], params[3], 0, 0};
+  std::vector<WhereRow> out;
+  const double peak_slip = mf_peak(base, 1.0).slip_ratio;
+  std::vector<std::pair<std::string, double>> acc;
+  auto add = [&](const std::string& region, double r2) {
+    for (auto& [name, v] : acc)
+      if (name == region) return void(v += r2);
+    acc.emplace_back(region, r2);
+  };
+  std::vector<std::pair<std::string, std::size_t>> counts;
+  auto count = [&](const std::string& region) {
+    for (auto& [name, v] : counts)
+      if (name == region) return void(++v);
+    counts.emplace_back(region, 1);
+  };
+  double total = 0;
+  for (const Run& r : runs) {
+    const auto f = predict(r, params, {});
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const double r2 = (r.force_n[i] - f[i]) * (r.force_n[i] - f[i]);
+      total += r2;
+      const std::string slip_region = r.slip[i] < 0.5 * peak_slip   ? "linear"
+                                      : r.slip[i] < 1.5 * peak_slip ? "near_peak"
+                                                                    : "after_peak";
+      const std::string phase = r.pressure_rate_bar_per_s[i] >= 0 ? "apply" : "release";
+      for (const std::string& reg : {slip_region, "phase:" + phase, "run:" + r.name}) {
+        add(reg, r2);
+        count(reg);
+      }
+    }
+  }
+  for (std::size_t k = 0; k < acc.size(); ++k)
+    out.push_back({acc[k].first, std::sqrt(acc[k].second / static_cast<double>(counts[k].second)),
+                   total > 0 ? acc[k].second / total : 0.0});
+
+  return out;
+}
+
 }  // namespace
 
 Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Options& o) {
@@ -344,40 +431,7 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
   const MfParams base{
       rep.before.params[0], rep.before.params[1], rep.before.params[2], rep.before.params[3], 0, 0};
   rep.gap_before_rmse_n = heldout(runs, {}, base);
-  // Where: baseline residual by slip region, by phase, by run.
-  const double peak_slip = mf_peak(base, 1.0).slip_ratio;
-  std::vector<std::pair<std::string, double>> acc;
-  auto add = [&](const std::string& region, double r2) {
-    for (auto& [name, v] : acc)
-      if (name == region) return void(v += r2);
-    acc.emplace_back(region, r2);
-  };
-  std::vector<std::pair<std::string, std::size_t>> counts;
-  auto count = [&](const std::string& region) {
-    for (auto& [name, v] : counts)
-      if (name == region) return void(++v);
-    counts.emplace_back(region, 1);
-  };
-  double total = 0;
-  for (const Run& r : runs) {
-    const auto f = predict(r, rep.before.params, {});
-    for (std::size_t i = 0; i < f.size(); ++i) {
-      const double r2 = (r.force_n[i] - f[i]) * (r.force_n[i] - f[i]);
-      total += r2;
-      const std::string slip_region = r.slip[i] < 0.5 * peak_slip   ? "linear"
-                                      : r.slip[i] < 1.5 * peak_slip ? "near_peak"
-                                                                    : "after_peak";
-      const std::string phase = r.pressure_rate_bar_per_s[i] >= 0 ? "apply" : "release";
-      for (const std::string& reg : {slip_region, "phase:" + phase, "run:" + r.name}) {
-        add(reg, r2);
-        count(reg);
-      }
-    }
-  }
-  for (std::size_t k = 0; k < acc.size(); ++k)
-    rep.where.push_back({acc[k].first,
-                         std::sqrt(acc[k].second / static_cast<double>(counts[k].second)),
-                         total > 0 ? acc[k].second / total : 0.0});
+  rep.where = where_rows(runs, rep.before.params);
 
   // Which: forward selection on held-out error.
   std::vector<Effect> chosen;
@@ -459,6 +513,110 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
   } else if (gap_left) {
     rep.verdict.push_back("unexplained");
   }
+  return rep;
+}
+
+}  // namespace brakefit::gap
+
+namespace brakefit::gap {
+
+namespace {
+
+/// Leave-one-road-run-out with B, C, D, E held at the roller's values.
+double heldout_fixed(const std::vector<Run>& road, const std::vector<Effect>& effects,
+                     const MfParams& base) {
+  const std::vector<double> b{base.B, base.C, base.D, base.E};
+  double sq = 0;
+  for (std::size_t k = 0; k < road.size(); ++k) {
+    std::vector<const Run*> train;
+    for (std::size_t i = 0; i < road.size(); ++i)
+      if (i != k) train.push_back(&road[i]);
+    const Fit f = effects.empty() ? Fit{b, {}, 0, 0} : fit_effects(train, effects, base);
+    const double e = rmse(road[k], f.params, effects);
+    sq += e * e;
+  }
+  return std::sqrt(sq / static_cast<double>(road.size()));
+}
+
+}  // namespace
+
+Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>& road,
+                         const MfParams& start, const Options& o) {
+  if (roller.empty()) throw InputError("bench-vs-bench gap: no usable roller run");
+  if (road.size() < 2)
+    throw InputError(
+        "bench-vs-bench gap needs at least two road runs (each transfer effect is checked on a "
+        "road run it was not fitted to)");
+  Report rep;
+  std::vector<const Run*> rp, all;
+  for (const Run& r : roller) rp.push_back(&r);
+  double noise_sq = 0;
+  for (const Run& r : road) {
+    all.push_back(&r);
+    noise_sq += r.noise_n * r.noise_n;
+  }
+  rep.noise_n = std::sqrt(noise_sq / static_cast<double>(road.size()));
+  const Fit roller_fit = fit_runs(rp, {}, start);
+  const MfParams base{
+      roller_fit.params[0], roller_fit.params[1], roller_fit.params[2], roller_fit.params[3], 0, 0};
+  rep.before = fit_effects(all, {}, base);  // the roller's parameters on the road
+  rep.before.stderr_ = roller_fit.stderr_;
+  rep.gap_before_rmse_n = heldout_fixed(road, {}, base);
+  rep.where = where_rows(road, rep.before.params);
+
+  std::vector<Effect> chosen;
+  double current = rep.gap_before_rmse_n;
+  Fit current_fit = rep.before;
+  for (std::size_t round = 0; round < o.max_effects; ++round) {
+    std::vector<EffectScore> scores;
+    std::vector<Fit> fits;
+    for (Effect e : kTransferEffects) {
+      if (std::find(chosen.begin(), chosen.end(), e) != chosen.end()) continue;
+      std::vector<Effect> model = chosen;
+      model.push_back(e);
+      EffectScore sc;
+      sc.effect = e;
+      sc.heldout_rmse_before_n = current;
+      sc.heldout_rmse_after_n = heldout_fixed(road, model, base);
+      sc.gain = 1.0 - sc.heldout_rmse_after_n / std::max(current, 1e-12);
+      Fit f = fit_effects(all, model, base);
+      sc.delta_bic = f.bic() - current_fit.bic();
+      sc.params.emplace_back(effect_param(e).name, f.params.back());
+      scores.push_back(sc);
+      fits.push_back(std::move(f));
+    }
+    if (scores.empty()) break;
+    std::size_t bi = 0;
+    for (std::size_t i = 1; i < scores.size(); ++i)
+      if (scores[i].gain > scores[bi].gain) bi = i;
+    EffectScore& best = scores[bi];
+    const EffectParam bp = effect_param(best.effect);
+    best.accepted = best.gain >= o.gate_gain && best.delta_bic <= -o.bic_margin &&
+                    !at_bound(fits[bi].params.back(), bp.lo, bp.hi);
+    for (std::size_t i = 0; i < scores.size(); ++i) {
+      if (i == bi || !best.accepted) continue;
+      const auto& sc = scores[i];
+      if (sc.gain >= o.gate_gain && best.gain - sc.gain < o.separability * best.gain)
+        rep.notes.push_back(fmt::format(
+            "the road runs cannot separate {} from {} (held-out gains {:.3f} and {:.3f})",
+            to_string(best.effect), to_string(sc.effect), best.gain, sc.gain));
+    }
+    if (round == 0) rep.effects = scores;
+    if (!best.accepted) break;
+    if (round > 0) rep.effects.push_back(best);
+    chosen.push_back(best.effect);
+    current = best.heldout_rmse_after_n;
+    current_fit = fits[bi];
+  }
+  rep.accepted = chosen;
+  rep.after = current_fit;
+  rep.gap_after_rmse_n = current;
+  for (Effect e : chosen) rep.verdict.push_back(to_string(e));
+  const bool gap_left = rep.gap_after_rmse_n > o.noise_factor * rep.noise_n;
+  if (chosen.empty())
+    rep.verdict.push_back(gap_left ? "unexplained" : "none");
+  else if (gap_left)
+    rep.verdict.push_back("unexplained");
   return rep;
 }
 

@@ -20,11 +20,16 @@ enum class Effect {
   BrakeThreshold,
   SlipOffset,
   LoadTransfer,
-  SpeedFriction
+  SpeedFriction,
+  RollerFriction  ///< bench vs bench only: road/roller friction ratio scales D
 };
 inline constexpr std::array<Effect, 7> kAllEffects = {
     Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia, Effect::BrakeThreshold,
     Effect::SlipOffset,       Effect::LoadTransfer, Effect::SpeedFriction};
+/// The transfer effects of bench-vs-bench mode (roller fit -> road runs).
+inline constexpr std::array<Effect, 6> kTransferEffects = {
+    Effect::RollerFriction,   Effect::LoadTransfer, Effect::SpeedFriction,
+    Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia};
 const char* to_string(Effect e);
 
 struct EffectParam {
@@ -114,5 +119,15 @@ struct Report {
 
 /// Needs at least two runs (leave-one-run-out). Throws InputError otherwise.
 Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Options& o = {});
+
+/// Only the effects' parameters, with B, C, D, E held at base (bench-vs-bench mode).
+Fit fit_effects(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
+                const MfParams& base);
+
+/// Bench vs bench: B, C, D, E fitted on the roller runs predict each road run from its measured
+/// slip; each transfer effect is then fitted on the road runs (B, C, D, E held) and ranked by
+/// leave-one-road-run-out error; forward selection as in diagnose(). Needs two road runs.
+Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>& road,
+                         const MfParams& start, const Options& o = {});
 
 }  // namespace brakefit::gap

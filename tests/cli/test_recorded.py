@@ -197,3 +197,24 @@ class Gap(unittest.TestCase):
         r = run("gap", os.path.join(REC, "roller_2p2bar_fast.log"))
         self.assertEqual(r.returncode, 65)
         self.assertIn("at least two runs", r.stderr)
+
+    def test_roller_vs_road_ranks_the_transfer_effects(self):
+        roller = sorted(glob.glob(os.path.join(REC, "roller_2p2bar_*.log")))
+        road = sorted(glob.glob(os.path.join(REC, "ground_2p2bar_*.log")))
+        r = run("gap", "--json", "--roller", *roller, "--road", *road)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        doc = json.loads(r.stdout)
+        self.assertEqual(doc["schema"], "brakefit.gap/1")
+        self.assertEqual(doc["mode"], "roller_vs_road")
+        names = {e["name"] for e in doc["effects"]}
+        for required in ("load_transfer", "speed_friction", "roller_friction"):
+            self.assertIn(required, names)
+        # The ground runs were simulated with load transfer and a road 1/0.85 grippier than the
+        # rollers: one of those closes most of the gap on withheld road runs.
+        self.assertIn(doc["verdict"][0], ("load_transfer", "roller_friction"))
+        self.assertLess(doc["gap_after_rmse_n"], 0.3 * doc["gap_before_rmse_n"])
+        # The roller's B, C, D, E are held: parameters_before equals parameters_after's first four.
+        for k in "BCDE":
+            self.assertAlmostEqual(doc["parameters_before"][k], doc["parameters_after"][k], 9)
+        r = run("gap", "--roller", *roller)
+        self.assertEqual(r.returncode, 78)
