@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numeric>
 
 #include "core/curve.hpp"
@@ -357,19 +358,33 @@ bool at_bound(double v, double lo, double hi) {
   return v <= lo + tol || v >= hi - tol;
 }
 
+/// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
+using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
+
 /// Leave-one-run-out: RMS over runs of the held-out RMSE with parameters fitted on the others.
 double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects,
-               const MfParams& start) {
+               const Fitter& fit) {
   double sq = 0;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     std::vector<const Run*> train;
     for (std::size_t i = 0; i < runs.size(); ++i)
       if (i != k) train.push_back(&runs[i]);
-    const Fit f = fit_runs(train, effects, start);
-    const double e = rmse(runs[k], f.params, effects);
+    const double e = rmse(runs[k], fit(train, effects).params, effects);
     sq += e * e;
   }
   return std::sqrt(sq / static_cast<double>(runs.size()));
+}
+
+double noise_of(const std::vector<Run>& runs) {
+  double sq = 0;
+  for (const Run& r : runs) sq += r.noise_n * r.noise_n;
+  return std::sqrt(sq / static_cast<double>(runs.size()));
+}
+
+std::vector<const Run*> pointers(const std::vector<Run>& runs) {
+  std::vector<const Run*> out;
+  for (const Run& r : runs) out.push_back(&r);
+  return out;
 }
 
 /// Where: residual of the 4-parameter model by slip region, by phase, by run.
@@ -412,44 +427,29 @@ std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector
   return out;
 }
 
-}  // namespace
-
-Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Options& o) {
-  if (runs.size() < 2)
-    throw InputError(
-        "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
-        "to)");
-  Report rep;
-  std::vector<const Run*> all;
-  double noise_sq = 0;
-  for (const Run& r : runs) {
-    all.push_back(&r);
-    noise_sq += r.noise_n * r.noise_n;
-  }
-  rep.noise_n = std::sqrt(noise_sq / static_cast<double>(runs.size()));
-  rep.before = fit_runs(all, {}, start);
-  const MfParams base{
-      rep.before.params[0], rep.before.params[1], rep.before.params[2], rep.before.params[3], 0, 0};
-  rep.gap_before_rmse_n = heldout(runs, {}, base);
-  rep.where = where_rows(runs, rep.before.params);
-
-  // Which: forward selection on held-out error.
+/// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,
+/// gap_before_rmse_n, noise_n); fills effects, accepted, after, gap_after_rmse_n, verdict, notes.
+template <std::size_t N>
+void select_effects(Report& rep, const std::vector<Run>& runs,
+                    const std::array<Effect, N>& candidates, const Fitter& fit, const Options& o,
+                    const char* separability_note) {
+  const std::vector<const Run*> all = pointers(runs);
   std::vector<Effect> chosen;
   double current_heldout = rep.gap_before_rmse_n;
   Fit current_fit = rep.before;
   for (std::size_t round = 0; round < o.max_effects; ++round) {
     std::vector<EffectScore> scores;
     std::vector<Fit> fits;
-    for (Effect e : kAllEffects) {
+    for (Effect e : candidates) {
       if (std::find(chosen.begin(), chosen.end(), e) != chosen.end()) continue;
       std::vector<Effect> model = chosen;
       model.push_back(e);
       EffectScore s;
       s.effect = e;
       s.heldout_rmse_before_n = current_heldout;
-      s.heldout_rmse_after_n = heldout(runs, model, base);
+      s.heldout_rmse_after_n = heldout(runs, model, fit);
       s.gain = 1.0 - s.heldout_rmse_after_n / std::max(current_heldout, 1e-12);
-      Fit f = fit_runs(all, model, base);
+      Fit f = fit(all, model);
       s.delta_bic = f.bic() - current_fit.bic();
       s.params.emplace_back(effect_param(e).name, f.params.back());
       scores.push_back(s);
@@ -474,10 +474,8 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
       const EffectScore& second = scores[order[1]];
       const bool both_pass = second.gain >= o.gate_gain && second.delta_bic <= -o.bic_margin;
       if (best.accepted && both_pass && best.gain - second.gain < o.separability * best.gain)
-        rep.notes.push_back(
-            fmt::format("the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); "
-                        "runs at other speeds or ramp rates would",
-                        to_string(best.effect), to_string(second.effect), best.gain, second.gain));
+        rep.notes.push_back(fmt::format(fmt::runtime(separability_note), to_string(best.effect),
+                                        to_string(second.effect), best.gain, second.gain));
     }
     if (round == 0) rep.effects = scores;
     if (!best.accepted) break;
@@ -513,32 +511,31 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
   } else if (gap_left) {
     rep.verdict.push_back("unexplained");
   }
-  return rep;
-}
-
-}  // namespace brakefit::gap
-
-namespace brakefit::gap {
-
-namespace {
-
-/// Leave-one-road-run-out with B, C, D, E held at the roller's values.
-double heldout_fixed(const std::vector<Run>& road, const std::vector<Effect>& effects,
-                     const MfParams& base) {
-  const std::vector<double> b{base.B, base.C, base.D, base.E};
-  double sq = 0;
-  for (std::size_t k = 0; k < road.size(); ++k) {
-    std::vector<const Run*> train;
-    for (std::size_t i = 0; i < road.size(); ++i)
-      if (i != k) train.push_back(&road[i]);
-    const Fit f = effects.empty() ? Fit{b, {}, 0, 0} : fit_effects(train, effects, base);
-    const double e = rmse(road[k], f.params, effects);
-    sq += e * e;
-  }
-  return std::sqrt(sq / static_cast<double>(road.size()));
 }
 
 }  // namespace
+
+Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Options& o) {
+  if (runs.size() < 2)
+    throw InputError(
+        "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
+        "to)");
+  Report rep;
+  rep.noise_n = noise_of(runs);
+  rep.before = fit_runs(pointers(runs), {}, start);
+  const MfParams base{
+      rep.before.params[0], rep.before.params[1], rep.before.params[2], rep.before.params[3], 0, 0};
+  const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
+    return fit_runs(train, e, base);
+  };
+  rep.gap_before_rmse_n = heldout(runs, {}, fit);
+  rep.where = where_rows(runs, rep.before.params);
+
+  select_effects(rep, runs, kAllEffects, fit, o,
+                 "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at "
+                 "other speeds or ramp rates would");
+  return rep;
+}
 
 Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>& road,
                          const MfParams& start, const Options& o) {
@@ -548,75 +545,19 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
         "bench-vs-bench gap needs at least two road runs (each transfer effect is checked on a "
         "road run it was not fitted to)");
   Report rep;
-  std::vector<const Run*> rp, all;
-  for (const Run& r : roller) rp.push_back(&r);
-  double noise_sq = 0;
-  for (const Run& r : road) {
-    all.push_back(&r);
-    noise_sq += r.noise_n * r.noise_n;
-  }
-  rep.noise_n = std::sqrt(noise_sq / static_cast<double>(road.size()));
-  const Fit roller_fit = fit_runs(rp, {}, start);
+  rep.noise_n = noise_of(road);
+  const Fit roller_fit = fit_runs(pointers(roller), {}, start);
   const MfParams base{
       roller_fit.params[0], roller_fit.params[1], roller_fit.params[2], roller_fit.params[3], 0, 0};
-  rep.before = fit_effects(all, {}, base);  // the roller's parameters on the road
+  const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
+    return fit_effects(train, e, base);  // the roller's B, C, D, E held
+  };
+  rep.before = fit(pointers(road), {});  // the roller's parameters on the road
   rep.before.stderr_ = roller_fit.stderr_;
-  rep.gap_before_rmse_n = heldout_fixed(road, {}, base);
+  rep.gap_before_rmse_n = heldout(road, {}, fit);
   rep.where = where_rows(road, rep.before.params);
-
-  std::vector<Effect> chosen;
-  double current = rep.gap_before_rmse_n;
-  Fit current_fit = rep.before;
-  for (std::size_t round = 0; round < o.max_effects; ++round) {
-    std::vector<EffectScore> scores;
-    std::vector<Fit> fits;
-    for (Effect e : kTransferEffects) {
-      if (std::find(chosen.begin(), chosen.end(), e) != chosen.end()) continue;
-      std::vector<Effect> model = chosen;
-      model.push_back(e);
-      EffectScore sc;
-      sc.effect = e;
-      sc.heldout_rmse_before_n = current;
-      sc.heldout_rmse_after_n = heldout_fixed(road, model, base);
-      sc.gain = 1.0 - sc.heldout_rmse_after_n / std::max(current, 1e-12);
-      Fit f = fit_effects(all, model, base);
-      sc.delta_bic = f.bic() - current_fit.bic();
-      sc.params.emplace_back(effect_param(e).name, f.params.back());
-      scores.push_back(sc);
-      fits.push_back(std::move(f));
-    }
-    if (scores.empty()) break;
-    std::size_t bi = 0;
-    for (std::size_t i = 1; i < scores.size(); ++i)
-      if (scores[i].gain > scores[bi].gain) bi = i;
-    EffectScore& best = scores[bi];
-    const EffectParam bp = effect_param(best.effect);
-    best.accepted = best.gain >= o.gate_gain && best.delta_bic <= -o.bic_margin &&
-                    !at_bound(fits[bi].params.back(), bp.lo, bp.hi);
-    for (std::size_t i = 0; i < scores.size(); ++i) {
-      if (i == bi || !best.accepted) continue;
-      const auto& sc = scores[i];
-      if (sc.gain >= o.gate_gain && best.gain - sc.gain < o.separability * best.gain)
-        rep.notes.push_back(fmt::format(
-            "the road runs cannot separate {} from {} (held-out gains {:.3f} and {:.3f})",
-            to_string(best.effect), to_string(sc.effect), best.gain, sc.gain));
-    }
-    if (round == 0) rep.effects = scores;
-    if (!best.accepted) break;
-    if (round > 0) rep.effects.push_back(best);
-    chosen.push_back(best.effect);
-    current = best.heldout_rmse_after_n;
-    current_fit = fits[bi];
-  }
-  rep.accepted = chosen;
-  rep.after = current_fit;
-  rep.gap_after_rmse_n = current;
-  for (Effect e : chosen) rep.verdict.push_back(to_string(e));
-  const bool gap_left = rep.gap_after_rmse_n > o.noise_factor * rep.noise_n;
-  if (chosen.empty())
-    rep.verdict.push_back(gap_left ? "unexplained" : "none");
-  else if (gap_left)
-    rep.verdict.push_back("unexplained");
+  select_effects(rep, road, kTransferEffects, fit, o,
+                 "the road runs cannot separate {} from {} (held-out gains {:.3f} and {:.3f})");
   return rep;
 }
 
