@@ -2,6 +2,11 @@
 
 #include <arpa/inet.h>
 
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
 #include "core/toml_reader.hpp"
 
 namespace brakefit::daemon {
@@ -212,6 +217,18 @@ Config parse_config(std::string_view text, const std::string& source) {
   if (const auto* t = rd.table(root, "", "store")) parse_store(rd, *t, c);
   if (const auto* t = rd.table(root, "", "record")) parse_record(rd, *t, c);
   return c;
+}
+
+std::string read_text_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+Config load_config(const std::string& path) {
+  return parse_config(read_text_file(path), path);
 }
 
 }  // namespace brakefit::daemon

@@ -61,5 +61,9 @@ struct Config {
 
 /// Throws InputError "FILE: key 'a.b': ..." on any invalid content.
 Config parse_config(std::string_view text, const std::string& source);
+/// Reads and parses the file (start and SIGHUP); an unreadable file is an InputError naming it.
+Config load_config(const std::string& path);
+/// A whole file as text; InputError "PATH: cannot read: ..." when it cannot be read.
+std::string read_text_file(const std::string& path);
 
 }  // namespace brakefit::daemon

@@ -23,14 +23,6 @@ namespace brakefit::daemon {
 
 namespace {
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 std::int64_t unix_now() {
   return static_cast<std::int64_t>(std::time(nullptr));
 }
@@ -132,7 +124,7 @@ void Daemon::open_model() {
     return;
   }
   try {
-    model_ = deserialize_model(read_text(cfg_.model_path), cfg_.model_path);
+    model_ = deserialize_model(read_text_file(cfg_.model_path), cfg_.model_path);
   } catch (const std::exception& e) {
     throw DaemonError(kExitConfig, fmt::format("{} (key 'daemon.model')", e.what()));
   }
@@ -210,8 +202,10 @@ void Daemon::publish_finished(Clock::time_point closed) {
     const std::string hash = model ? model->hash : "";
     // 1. durable first
     const auto t_fitted = Clock::now();
-    const auto id = store_->commit(er, doc.dump(), pipeline::format_calibration(cfg_.calibration),
-                                   vehicle_id_, source_->describe(), hash, unix_now());
+    bool samples_stored = false;
+    const auto id =
+        store_->commit(er, doc.dump(), pipeline::format_calibration(cfg_.calibration), vehicle_id_,
+                       source_->describe(), hash, unix_now(), &samples_stored);
     if (!id) {
       store_error_ = true;
       spdlog::error("{}", store_->error());
@@ -224,10 +218,7 @@ void Daemon::publish_finished(Clock::time_point closed) {
       if (f == "sensor_fault") flags |= kFlagSensorFault;
     }
     if (er.results.empty()) flags |= kFlagNotFitted;
-    if (id) {
-      if (auto stored = store_->get(*id); stored && !stored->samples_stored)
-        flags |= kFlagSamplesNotStored;
-    }
+    if (id && !samples_stored) flags |= kFlagSamplesNotStored;
     ++seq_;
     RegisterWrites w;
     w.u16("event.seq_begin", seq_);
@@ -278,7 +269,7 @@ void Daemon::reload() {
   sd_notify(0, "RELOADING=1");
   spdlog::info("reloading {}", config_path_);
   try {
-    Config next = parse_config(read_text(config_path_), config_path_);
+    Config next = load_config(config_path_);
     if (next.kind != cfg_.kind || next.replay_file != cfg_.replay_file ||
         next.can_interface != cfg_.can_interface || next.modbus_tcp.port != cfg_.modbus_tcp.port ||
         next.modbus_tcp.address != cfg_.modbus_tcp.address || next.store.path != cfg_.store.path)

@@ -6,9 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstring>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 
 #include "brakefit/version.hpp"
 #include "daemon/daemon.hpp"
@@ -52,14 +50,7 @@ int main(int argc, char** argv) {
 
   Config cfg;
   try {
-    std::ifstream in(config_path, std::ios::binary);
-    if (!in) {
-      spdlog::error("{}: cannot read configuration: {}", config_path, std::strerror(errno));
-      return kExitConfig;
-    }
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    cfg = parse_config(ss.str(), config_path);
+    cfg = load_config(config_path);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return kExitConfig;

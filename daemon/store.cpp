@@ -231,7 +231,7 @@ int EventStore::insert(const pipeline::EventResult& e, const std::string& result
 std::optional<std::int64_t> EventStore::commit(
     const pipeline::EventResult& e, const std::string& result_json,
     const std::string& calibration_toml, const std::string& vehicle_id, const std::string& source,
-    const std::string& model_hash, std::int64_t now_unix_s) {
+    const std::string& model_hash, std::int64_t now_unix_s, bool* samples_stored) {
   std::int64_t id = 0;
   bool with_samples = cfg_.store_samples && !disk_low();
   if (cfg_.store_samples && !with_samples) degraded_ = true;
@@ -247,6 +247,7 @@ std::optional<std::int64_t> EventStore::commit(
     error_ = fmt::format("{}: cannot store event: {}", cfg_.path, sqlite3_errstr(rc));
     return std::nullopt;
   }
+  if (samples_stored) *samples_stored = with_samples;
   return id;
 }
 

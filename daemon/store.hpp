@@ -36,11 +36,12 @@ class EventStore {
   EventStore& operator=(const EventStore&) = delete;
 
   /// Commits the event; returns its row id, or std::nullopt when even the results could not be
-  /// stored (error() then says why).
+  /// stored (error() then says why). samples_stored: whether the raw samples went in too.
   std::optional<std::int64_t> commit(const pipeline::EventResult& e, const std::string& result_json,
                                      const std::string& calibration_toml,
                                      const std::string& vehicle_id, const std::string& source,
-                                     const std::string& model_hash, std::int64_t now_unix_s);
+                                     const std::string& model_hash, std::int64_t now_unix_s,
+                                     bool* samples_stored = nullptr);
   /// Deletes events older than retention_days or beyond max_events; returns how many.
   int apply_retention(std::int64_t now_unix_s);
   std::vector<StoredEvent> list(int limit) const;
