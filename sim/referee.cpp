@@ -52,7 +52,7 @@ Scenario inject(Scenario s, const Injection& inj) {
   return s;
 }
 
-std::vector<gap::Run> simulate_runs(const Scenario& base, std::uint64_t seed) {
+std::vector<gap::Run> simulate_runs(const Scenario& base, std::uint64_t seed, MfParams* truth) {
   std::vector<gap::Run> out;
   std::uint64_t k = 0;
   for (const char* ramp : {"slow", "medium", "fast"}) {
@@ -61,6 +61,7 @@ std::vector<gap::Run> simulate_runs(const Scenario& base, std::uint64_t seed) {
     s.ramp_bar_per_s = ramp_rate_bar_per_s(ramp);
     s.seed = seed * 16 + k++;
     const SimResult r = simulate(s);
+    if (truth) *truth = r.truth;
     pipeline::PipelineOptions o;
     o.fit = false;
     pipeline::Pipeline p(r.calibration, o, nullptr);

@@ -23,7 +23,9 @@ Injection draw_injection(Rng& rng, double p_none);
 /// The scenario with the injection switched on (everything else as in base).
 Scenario inject(Scenario base, const Injection& inj);
 /// Runs at the slow, medium and fast pedal ramps, conditioned for the diagnosis.
-std::vector<gap::Run> simulate_runs(const Scenario& s, std::uint64_t seed);
+/// truth: the tyre's Pac96 equivalent, when wanted.
+std::vector<gap::Run> simulate_runs(const Scenario& s, std::uint64_t seed,
+                                    MfParams* truth = nullptr);
 
 /// Start values for the diagnosis: least squares on the pooled points of the runs.
 MfParams pooled_start(const std::vector<gap::Run>& runs);

@@ -14,23 +14,10 @@ using brakefit::test::scenario;
 
 namespace {
 
-/// Three runs at different pedal ramps, the same effects.
-std::vector<gap::Run> runs(sim::Scenario s, MfParams* truth = nullptr) {
-  std::vector<gap::Run> out;
-  for (const char* ramp : {"slow", "medium", "fast"}) {
-    s.pedal_ramp = ramp;
-    s.ramp_bar_per_s = sim::ramp_rate_bar_per_s(ramp);
-    s.seed += 1;
-    const sim::SimResult r = sim::simulate(s);
-    if (truth) *truth = r.truth;
-    pipeline::PipelineOptions o;
-    o.fit = false;
-    pipeline::Pipeline p(r.calibration, o, nullptr);
-    for (const auto& f : r.frames) p.feed(f);
-    p.finish();
-    EXPECT_EQ(p.events().size(), 1u);
-    out.push_back(gap::condition(ramp, p.events().front().event, r.calibration, {}));
-  }
+/// Three runs at different pedal ramps (slow, medium, fast), the same effects.
+std::vector<gap::Run> runs(const sim::Scenario& s, MfParams* truth = nullptr) {
+  auto out = sim::simulate_runs(s, s.seed, truth);
+  EXPECT_EQ(out.size(), 3u);
   return out;
 }
 
