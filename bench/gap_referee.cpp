@@ -62,6 +62,8 @@ int main(int argc, char** argv) {
       trials = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--calibrate"))
       calib = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--misspecified"))
+      misspecified = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--null-share"))
       null_share = std::atof(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--seed"))
@@ -100,6 +102,7 @@ int main(int argc, char** argv) {
   std::map<std::string, std::map<std::string, int>> confusion;
   std::map<std::string, std::vector<double>> mag_err;
   std::vector<double> after_over_noise;
+  std::map<std::string, std::vector<double>> after_by_effect;  // gap after / noise, every trial
   int correct = 0, correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0;
   for (int t = 0; t < trials; ++t) {
     const sim::Injection inj = sim::draw_injection(rng, null_share);
@@ -118,6 +121,8 @@ int main(int argc, char** argv) {
       if (std::isfinite(r.estimate))
         mag_err[inj.effect].push_back(std::abs(r.estimate - inj.magnitude) / inj.magnitude);
       if (r.correct()) after_over_noise.push_back(r.gap_after_n / std::max(r.noise_n, 1e-9));
+      after_by_effect[inj.effect + (r.exact() ? "" : " (not exact)")].push_back(
+          r.gap_after_n / std::max(r.noise_n, 1e-9));
     }
     if ((t + 1) % 20 == 0)
       std::cerr << fmt::format("  {}/{} trials, {} correct\n", t + 1, trials, correct);
@@ -162,6 +167,12 @@ int main(int argc, char** argv) {
   }
   j["gap_after_over_noise"] = {{"median", quantile(after_over_noise, 0.5)},
                                {"p90", quantile(after_over_noise, 0.9)}};
+  for (const auto& [e, v] : after_by_effect) {
+    std::cout << fmt::format("gap after / noise, {}: median {:.2f}, p90 {:.2f} ({} trials)\n", e,
+                             quantile(v, 0.5), quantile(v, 0.9), v.size());
+    j["gap_after_over_noise_by_effect"][e] = {{"median", quantile(v, 0.5)},
+                                              {"p90", quantile(v, 0.9)}};
+  }
   j["misspecified_trials"] = misspecified;
   j["misspecified_none_or_unexplained"] =
       misspecified ? static_cast<double>(mis_ok) / misspecified : NAN;

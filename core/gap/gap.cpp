@@ -92,6 +92,8 @@ double interp(const std::vector<double>& t, const std::vector<double>& x, double
 
 }  // namespace
 
+/// The initial slip rate is fitted over this much of the run's start.
+constexpr double kInitialWindowS = 0.1;
 /// A lock-up runaway starts past the linear region: jumps below this slip are noise.
 constexpr double kRunawayMinSlip = 0.05;
 
@@ -134,12 +136,13 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   }
   if (full.t_s.size() < 20)
     throw InputError(fmt::format("{}: too few samples for a diagnosis", name));
-  // Noise of the force channel: robust scale of first differences (the signal is smooth at 1 kHz).
+  // Noise of the force channel: robust scale of second differences (the signal is smooth at
+  // 1 kHz; first differences would count a 250 bar/s ramp, 16 N per sample, as noise).
   std::vector<double> df;
-  for (std::size_t i = 1; i < full.force_n.size(); ++i)
-    df.push_back(std::abs(full.force_n[i] - full.force_n[i - 1]));
+  for (std::size_t i = 1; i + 1 < full.force_n.size(); ++i)
+    df.push_back(std::abs(full.force_n[i + 1] - 2 * full.force_n[i] + full.force_n[i - 1]));
   std::nth_element(df.begin(), df.begin() + static_cast<long>(df.size() / 2), df.end());
-  full.noise_n = df[df.size() / 2] / 0.6745 / std::sqrt(2.0);
+  full.noise_n = df[df.size() / 2] / 0.6745 / std::sqrt(6.0);
   const auto vr = smooth(full.v_ref_mps, o.smooth_half_window),
              vw = smooth(v_wheel, o.smooth_half_window);
   full.v_ref_mps = vr;
@@ -150,6 +153,24 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   for (double& d : dref) d = -d;
   full.ref_decel_mps2 = dref;
   full.pressure_rate_bar_per_s = derivative(full.t_s, smooth(pressure, o.smooth_half_window));
+  {  // initial slip rate: least squares over the first kInitialWindowS
+    double st = 0, ss = 0, stt = 0, sts = 0, m = 0;
+    for (std::size_t i = 0; i < full.t_s.size() && full.t_s[i] - full.t_s[0] <= kInitialWindowS;
+         ++i, ++m) {
+      const double t = full.t_s[i] - full.t_s[0];
+      st += t;
+      ss += full.slip[i];
+      stt += t * t;
+      sts += t * full.slip[i];
+    }
+    const double den = m * stt - st * st;
+    if (m >= 3 && den > 0) full.initial_slip_rate_per_s = std::max(0.0, (m * sts - st * ss) / den);
+    // initial force: the mean over the first 10 ms (noise / sqrt(10) at 1 kHz)
+    double sf = 0, mf = 0;
+    for (std::size_t i = 0; i < full.t_s.size() && full.t_s[i] - full.t_s[0] <= 0.01; ++i, ++mf)
+      sf += full.force_n[i];
+    full.initial_force_n = sf / mf;
+  }
   // Decimate uniformly in time. (Uniform in slip progress was tried: it over-weights the runaway
   // after the peak, where slip is measured across only one or two frames, and the null case got
   // worse: 147 N instead of 7 N.)
@@ -162,6 +183,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.wheel_radius_m = full.wheel_radius_m;
   r.brake_gain_n_per_bar = full.brake_gain_n_per_bar;
   r.noise_n = full.noise_n;
+  r.initial_slip_rate_per_s = full.initial_slip_rate_per_s;
+  r.initial_force_n = full.initial_force_n;
   for (std::size_t i : idx) {
     r.t_s.push_back(full.t_s[i]);
     r.slip.push_back(full.slip[i]);
@@ -174,35 +197,55 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   return r;
 }
 
+namespace {
+
+/// sigma dk'/dx = k - k' along the rolled distance x, solved exactly for slip linear between
+/// samples (the runs are decimated: an Euler step of 10-25 ms against a time constant sigma/V of
+/// 40-300 ms would misplace the lag). y0: the transient slip at the first sample.
+std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0) {
+  const std::size_t n = k.size();
+  std::vector<double> y(n);
+  y[0] = std::clamp(y0, std::min(k[0], 0.0), std::max(k[0], 0.0));
+  for (std::size_t i = 1; i < n; ++i) {
+    const double h =
+        (r.t_s[i] - r.t_s[i - 1]) * 0.5 * (r.v_ref_mps[i] + r.v_ref_mps[i - 1]) / sigma_m;
+    if (h < 1e-9) {
+      y[i] = y[i - 1];
+      continue;
+    }
+    const double slope = (k[i] - k[i - 1]) / h;
+    y[i] = k[i] - slope + (y[i - 1] - k[i - 1] + slope) * std::exp(-h);
+  }
+  return y;
+}
+
+}  // namespace
+
 std::vector<double> predict(const Run& r, const std::vector<double>& p,
                             const std::vector<Effect>& effects) {
   const std::size_t n = r.t_s.size();
-  std::vector<double> slip = r.slip;
   std::vector<double> d_scale(n, 1.0), add(n, 0.0);
+  // The force-side effects first; the slip-side ones (relaxation, slip offset, time offset) are
+  // then applied in that order whatever the order of `effects` (they commute but for the initial
+  // state of the relaxation, which needs the force side).
+  double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0;
+  bool relaxation = false, threshold = false;
   for (std::size_t k = 0; k < effects.size(); ++k) {
     const double q = p[4 + k];
     switch (effects[k]) {
-      case Effect::TimeOffset: {  // the force channel is late by dt: it shows the tyre at t - dt
-        std::vector<double> shifted(n);
-        for (std::size_t i = 0; i < n; ++i) shifted[i] = interp(r.t_s, slip, r.t_s[i] - q);
-        slip = std::move(shifted);
+      case Effect::TimeOffset:  // the force channel is late by dt: it shows the tyre at t - dt
+        dt_s = q;
         break;
-      }
       case Effect::SlipOffset:
-        for (double& s : slip) s -= q;
+        slip_offset = q;
         break;
-      case Effect::RelaxationLength: {  // sigma dk'/dt + V k' = V k (implicit Euler along the run)
-        std::vector<double> lagged(n);
-        lagged[0] = slip[0];
-        for (std::size_t i = 1; i < n; ++i) {
-          const double a = (r.t_s[i] - r.t_s[i - 1]) * r.v_ref_mps[i] / std::max(q, 1e-6);
-          lagged[i] = (lagged[i - 1] + a * slip[i]) / (1 + a);
-        }
-        slip = std::move(lagged);
+      case Effect::RelaxationLength:
+        relaxation = true;
+        sigma_m = std::max(q, 1e-6);
         break;
-      }
-      case Effect::BrakeThreshold:  // gain p = Tb/R + gain p0
-        for (double& a : add) a += r.brake_gain_n_per_bar * q;
+      case Effect::BrakeThreshold:  // gain p = Tb/R + gain p0 (below p0: no torque, see below)
+        threshold = true;
+        threshold_n = r.brake_gain_n_per_bar * q;
         break;
       case Effect::WheelInertia:  // I w' = F R - Tb  =>  Tb/R = F - I a_wheel / R^2
         for (std::size_t i = 0; i < n; ++i)
@@ -220,12 +263,40 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
         break;
     }
   }
+  std::vector<double> slip = r.slip;
+  if (relaxation) {
+    // Initial transient slip: the one whose force (linear region) is the measured initial force.
+    const double stiffness_n = p[0] * p[1] * p[2] * d_scale[0];
+    const double k0 =
+        stiffness_n > 0 ? (r.initial_force_n - add[0] - std::min(threshold_n, r.initial_force_n)) /
+                                  stiffness_n +
+                              slip_offset
+                        : slip.front();
+    slip = relax(r, slip, sigma_m, k0);
+  }
+  if (slip_offset != 0)
+    for (double& s : slip) s -= slip_offset;
+  if (dt_s != 0) {
+    std::vector<double> shifted(n);
+    const double s0 = slip.front(), t0 = r.t_s.front();
+    for (std::size_t i = 0; i < n; ++i) {
+      const double at = r.t_s[i] - dt_s;
+      // Before the run: the ramp from zero slip that led into it.
+      shifted[i] = at >= t0
+                       ? interp(r.t_s, slip, at)
+                       : std::max(s0 + r.initial_slip_rate_per_s * (at - t0), std::min(s0, 0.0));
+    }
+    slip = std::move(shifted);
+  }
   std::vector<double> f(n);
   const MfParams base{p[0], p[1], p[2], p[3], 0, 0};
   for (std::size_t i = 0; i < n; ++i) {
     MfParams m = base;
     m.D *= d_scale[i];
     f[i] = mf_force_n(m, slip[i]) + add[i];
+    // Brake threshold: gain p = Tb/R + gain p0 while the brake bites; below p0 the pads give no
+    // torque and the measured pressure can be anything up to p0: gain min(p, p0) is added.
+    if (threshold) f[i] += std::min(threshold_n, r.force_n[i]);
   }
   return f;
 }

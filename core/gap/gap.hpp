@@ -48,6 +48,11 @@ struct Run {
   std::vector<double> ref_decel_mps2;    ///< -d v_ref / dt
   std::vector<double> pressure_rate_bar_per_s;
   double noise_n = 0.0;  ///< measurement noise of the force, estimated before decimation
+  /// Slip rate at the start of the run (least squares over its first 100 ms, full rate): before
+  /// the event the slip is taken as the ramp from zero at this rate (time offset).
+  double initial_slip_rate_per_s = 0.0;
+  /// Mean force over the first 10 ms: sets the relaxation's initial transient slip.
+  double initial_force_n = 0.0;
 };
 
 struct ConditionOptions {
