@@ -20,6 +20,7 @@ std::vector<std::string> Effects::active() const {
   if (time_offset_s != 0) a.push_back("time_offset");
   if (encoder_ppr > 0) a.push_back("quantisation");
   if (tester_force_lag_s > 0) a.push_back("tester_force_lag");
+  if (wheel_radius_error_ratio != 0) a.push_back("wheel_radius_error");
   return a;
 }
 
@@ -98,10 +99,11 @@ Scenario parse_scenario(std::string_view text, const std::string& source) {
   }
   if (const auto* t = rd.table(root, "", "effects")) {
     const std::string p = "effects.";
-    rd.check_keys(*t, p,
-                  {"relaxation_length_m", "wheel_inertia", "brake_threshold_bar", "speed_friction",
-                   "load_transfer", "roller_friction", "slip_offset", "pressure_lag_s",
-                   "pressure_noise_bar", "time_offset_s", "encoder_ppr", "tester_force_lag_s"});
+    rd.check_keys(
+        *t, p,
+        {"relaxation_length_m", "wheel_inertia", "brake_threshold_bar", "speed_friction",
+         "load_transfer", "roller_friction", "slip_offset", "pressure_lag_s", "pressure_noise_bar",
+         "time_offset_s", "encoder_ppr", "tester_force_lag_s", "wheel_radius_error_ratio"});
     auto& e = s.effects;
     e.relaxation_length_m = rd.number(*t, p, "relaxation_length_m", e.relaxation_length_m, 0, 2);
     e.wheel_inertia = rd.boolean(*t, p, "wheel_inertia", e.wheel_inertia);
@@ -115,6 +117,8 @@ Scenario parse_scenario(std::string_view text, const std::string& source) {
     e.time_offset_s = rd.number(*t, p, "time_offset_s", e.time_offset_s, 0, 1);
     e.encoder_ppr = rd.number(*t, p, "encoder_ppr", e.encoder_ppr, 0, 1e6);
     e.tester_force_lag_s = rd.number(*t, p, "tester_force_lag_s", e.tester_force_lag_s, 0, 1);
+    e.wheel_radius_error_ratio =
+        rd.number(*t, p, "wheel_radius_error_ratio", e.wheel_radius_error_ratio, -0.1, 0.1);
   }
   if (const auto* t = rd.table(root, "", "tyre")) {
     const std::string p = "tyre.";

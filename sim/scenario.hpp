@@ -25,6 +25,9 @@ struct Effects {
   double encoder_ppr = 0.0;          ///< quantisation; 0 = ideal (10^6 ppr)
   double tester_force_lag_s =
       0.0;  ///< the tester's force reading: first-order lag; 0 = the contact force
+  /// The wheel encoder is calibrated with a rolling radius (1 + this) x the true one: the
+  /// measured slip is offset by about minus this (a slip offset from calibration).
+  double wheel_radius_error_ratio = 0.0;
   std::vector<std::string> active() const;
 };
 

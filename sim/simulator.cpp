@@ -75,7 +75,7 @@ SimResult simulate(const Scenario& s) {
   auto& cal = r.calibration;
   cal.bench = s.bench;
   cal.roller_radius_m = rr;
-  cal.wheel_radius_m = rw;
+  cal.wheel_radius_m = rw * (1.0 + e.wheel_radius_error_ratio);
   cal.fifth_wheel_radius_m = s.fifth_wheel_radius_m;
   cal.roller_ppr = cal.wheel_ppr = cal.fifth_wheel_ppr = ppr;
   cal.brake_gain_n_per_bar = s.brake_gain_nm_per_bar / rw;

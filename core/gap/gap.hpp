@@ -32,6 +32,12 @@ inline constexpr std::array<Effect, 6> kTransferEffects = {
     Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia};
 const char* to_string(Effect e);
 
+/// Where the runs come from: model vs measurement on a roller bench (5 km/h) or on flat ground
+/// (40 km/h, fifth wheel), or roller vs road (bench vs bench). The acceptance gates are
+/// calibrated on null data of each condition.
+enum class Condition { Roller, Ground, RollerToRoad };
+const char* to_string(Condition c);
+
 struct EffectParam {
   const char* name;  ///< SI name, e.g. "sigma_m"
   double lo, hi, start;
@@ -41,6 +47,7 @@ EffectParam effect_param(Effect e);
 /// One conditioned run (a brake event), decimated for fitting.
 struct Run {
   std::string name;
+  can::BenchKind bench = can::BenchKind::Roller;
   double wheel_radius_m = 0.3;
   double brake_gain_n_per_bar = 1.0;
   std::vector<double> t_s, slip, v_ref_mps, force_n;
@@ -51,7 +58,8 @@ struct Run {
   /// Slip rate at the start of the run (least squares over its first 100 ms, full rate): before
   /// the event the slip is taken as the ramp from zero at this rate (time offset).
   double initial_slip_rate_per_s = 0.0;
-  /// Mean force over the first 10 ms: sets the relaxation's initial transient slip.
+  /// Force at the first sample (a line through the first 20 ms): sets the relaxation's initial
+  /// transient slip.
   double initial_force_n = 0.0;
 };
 
@@ -121,6 +129,10 @@ struct Report {
   Fit before, after;
   std::vector<std::string> notes;
 };
+
+/// The gates calibrated on null data of the condition by bench/gap_referee --calibrate (the
+/// figures are in docs/gap.md); the other options as in base.
+Options calibrated_options(Condition c, Options base = {});
 
 /// Needs at least two runs (leave-one-run-out). Throws InputError otherwise.
 Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Options& o = {});
