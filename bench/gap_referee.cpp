@@ -1,20 +1,27 @@
 // The blinded-injection referee of `brakefit gap` (issue 5):
-//   gap_referee [--trials 200] [--null-share 0.3] [--calibrate 30] [--seed 1]
+//   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
+//               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
+// For each condition (model vs measurement on the roller and on flat ground, roller vs road):
 // 1. calibrates the acceptance gates on null sets (seeds 1 000 000 + i, disjoint from the
 //    referee's), 2. runs the trials: each draws an effect or none and a magnitude, simulates three
-//    runs (slow, medium, fast pedal ramps), hides the label, diagnoses and scores. Prints the
-//    confusion matrix, the false-positive rate on none, the magnitude errors and the gap left
-//    after correction relative to the noise floor; a JSON document (brakefit.gap_referee/1) last.
+//    runs (three pedal ramps), hides the label, diagnoses and scores. Prints the confusion matrix,
+//    the false-positive rate on none, the magnitude errors and the gap left after correction
+//    relative to the noise floor; a JSON document (brakefit.gap_referee/1) last. The trials of a
+//    condition run on --threads threads (results do not depend on it: each trial has its seed).
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <iostream>
 #include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "brakefit/version.hpp"
 #include "sim/referee.hpp"
@@ -23,171 +30,231 @@ using namespace brakefit;
 
 namespace {
 
-std::string scenario_path(const char* name) {
-  return std::string(BRAKEFIT_SOURCE_DIR) + "/sim/scenarios/" + name + ".toml";
-}
-
-double kNullInertia = 0.005;
-
-sim::Scenario null_scenario() {
-  const std::string path = scenario_path("ideal_roller");
-  std::FILE* f = std::fopen(path.c_str(), "r");
-  std::string text;
-  char buf[4096];
-  while (f && !std::feof(f)) text.append(buf, std::fread(buf, 1, sizeof buf, f));
-  if (f) std::fclose(f);
-  sim::Scenario s = sim::parse_scenario(text, path);
-  // The null: every effect off and a wheel inertia whose signature (I a / R^2, largest in the
-  // runaway after the peak) stays below the force noise.
-  s.effects.wheel_inertia = true;
-  s.wheel_inertia_kgm2 = kNullInertia;
-  s.effects.pressure_noise_bar = 0.05;
-  return s;
-}
-
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return NAN;
   std::sort(v.begin(), v.end());
   return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
 }
 
-}  // namespace
+int g_threads = 2;
 
-int main(int argc, char** argv) {
-  int trials = 200, calib = 30, misspecified = 30;
+/// results[i] = f(i) for i < n on g_threads threads, with progress every 20 done.
+template <class T>
+std::vector<T> parallel_map(int n, const std::function<T(int)>& f, const std::string& what) {
+  std::vector<T> out(static_cast<std::size_t>(n));
+  std::atomic<int> next{0}, done{0};
+  std::mutex log;
+  auto worker = [&] {
+    for (int i = next++; i < n; i = next++) {
+      out[static_cast<std::size_t>(i)] = f(i);
+      const int d = ++done;
+      if (d % 20 == 0 || d == n) {
+        std::lock_guard lock(log);
+        std::cerr << fmt::format("  {}: {}/{}\n", what, d, n);
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < std::max(1, g_threads); ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  return out;
+}
+
+struct Settings {
+  int trials = 200, trials_other = 80, calib = 30, misspecified = 30;
   double null_share = 0.3;
   std::uint64_t seed = 1;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--trials"))
-      trials = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--calibrate"))
-      calib = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--misspecified"))
-      misspecified = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--null-share"))
-      null_share = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--seed"))
-      seed = std::strtoull(argv[i + 1], nullptr, 10);
-    else if (!std::strcmp(argv[i], "--null-inertia"))
-      kNullInertia = std::atof(argv[i + 1]);
-  }
-  const sim::Scenario base = null_scenario();
-  if (std::getenv("GAP_REFEREE_SHOW_NULL")) {  // one null set's first-round table
-    const auto runs = sim::simulate_runs(base, 1'000'000);
-    gap::Options probe;
-    probe.gate_gain = 1e9;
-    const auto rep = gap::diagnose(runs, sim::pooled_start(runs), probe);
-    std::cerr << fmt::format("null: gap {:.1f} N, noise {:.1f} N\n", rep.gap_before_rmse_n,
-                             rep.noise_n);
-    for (const auto& e : rep.effects)
-      std::cerr << fmt::format("  {:<18} {} {:.4g} gain {:.3f} dBIC {:.1f}\n",
-                               gap::to_string(e.effect), e.params[0].first, e.params[0].second,
-                               e.gain, e.delta_bic);
-    for (const auto& w : rep.where)
-      std::cerr << fmt::format("  where {:<22} {:.1f} N {:.2f}\n", w.region, w.rms_residual_n,
-                               w.share);
-  }
-  std::cerr << fmt::format("calibrating the gates on {} null sets...\n", calib);
-  const auto gates = sim::calibrate_gates(base, calib, 1'000'000, gap::Options{});
-  std::cerr << fmt::format(
-      "null best-candidate gain: median {:.3f}, max {:.3f}; best dBIC min {:.1f}\n",
-      quantile(gates.null_best_gain, 0.5), quantile(gates.null_best_gain, 1.0),
-      quantile(gates.null_best_delta_bic, 0.0));
-  std::cerr << fmt::format("gates: gain >= {:.3f}, dBIC <= -{:.1f}\n", gates.options.gate_gain,
-                           gates.options.bic_margin);
+};
 
-  Rng rng(seed);
+nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
+  const std::string cname = gap::to_string(c);
+  std::cerr << fmt::format("[{}] calibrating the gates on {} null sets...\n", cname, st.calib);
+  sim::GateCalibration gates;
+  {
+    // calibrate_gates is sequential; split its null sets over the threads by hand.
+    const auto per = parallel_map<sim::GateCalibration>(
+        st.calib,
+        [&](int i) {
+          return sim::calibrate_gates(c, 1, 1'000'000 + static_cast<std::uint64_t>(i),
+                                      gap::Options{});
+        },
+        cname + " null sets");
+    gates.options = gap::Options{};
+    for (const auto& g : per) {
+      gates.null_best_gain.push_back(g.null_best_gain.front());
+      gates.null_best_delta_bic.push_back(g.null_best_delta_bic.front());
+      gates.options.gate_gain = std::max(gates.options.gate_gain, g.options.gate_gain);
+      gates.options.bic_margin = std::max(gates.options.bic_margin, g.options.bic_margin);
+    }
+  }
+  std::cerr << fmt::format(
+      "[{}] null best-candidate gain: median {:.3f}, max {:.3f}; best dBIC min {:.1f}; gates: "
+      "gain >= {:.3f}, dBIC <= -{:.1f} (shipped: {:.3f}, -{:.1f})\n",
+      cname, quantile(gates.null_best_gain, 0.5), quantile(gates.null_best_gain, 1.0),
+      quantile(gates.null_best_delta_bic, 0.0), gates.options.gate_gain, gates.options.bic_margin,
+      gap::calibrated_options(c).gate_gain, gap::calibrated_options(c).bic_margin);
+
+  const int trials = c == gap::Condition::Roller ? st.trials : st.trials_other;
+  // Draws first (one generator, in order), then the trials in parallel.
+  Rng rng(st.seed + 100 * static_cast<std::uint64_t>(c));
+  std::vector<sim::Injection> draws;
+  for (int t = 0; t < trials; ++t) draws.push_back(sim::draw_injection(rng, st.null_share, c));
+  const auto results = parallel_map<sim::TrialResult>(
+      trials,
+      [&](int t) {
+        return sim::run_trial(draws[static_cast<std::size_t>(t)],
+                              st.seed * 1000 + static_cast<std::uint64_t>(t) +
+                                  100'000 * static_cast<std::uint64_t>(c),
+                              gates.options);
+      },
+      cname + " trials");
+
   std::vector<std::string> labels{"none"};
-  for (const auto& e : sim::referee_effects()) labels.push_back(e);
+  for (const auto& e : sim::referee_effects(c)) labels.push_back(e);
   std::map<std::string, std::map<std::string, int>> confusion;
-  std::map<std::string, std::vector<double>> mag_err;
+  std::map<std::string, std::vector<double>> mag_err, after_by_effect;
   std::vector<double> after_over_noise;
-  std::map<std::string, std::vector<double>> after_by_effect;  // gap after / noise, every trial
-  int correct = 0, correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0;
-  for (int t = 0; t < trials; ++t) {
-    const sim::Injection inj = sim::draw_injection(rng, null_share);
-    const auto r =
-        sim::run_trial(base, inj, seed * 1000 + static_cast<std::uint64_t>(t), gates.options);
+  int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0;
+  for (const auto& r : results) {
+    const auto& inj = r.truth;
     const std::string said = r.verdict.empty() ? "?" : r.verdict.front();
     ++confusion[inj.effect][said];
-    if (r.correct()) ++correct;
     if (inj.effect == "none") {
       ++n_none;
       if (said != "none" && said != "unexplained") ++fp_none;
-    } else {
-      ++n_effects;
-      if (r.correct()) ++correct_effects;
-      if (r.exact()) ++exact_effects;
-      if (std::isfinite(r.estimate))
-        mag_err[inj.effect].push_back(std::abs(r.estimate - inj.magnitude) / inj.magnitude);
-      if (r.correct()) after_over_noise.push_back(r.gap_after_n / std::max(r.noise_n, 1e-9));
-      after_by_effect[inj.effect + (r.exact() ? "" : " (not exact)")].push_back(
-          r.gap_after_n / std::max(r.noise_n, 1e-9));
+      continue;
     }
-    if ((t + 1) % 20 == 0)
-      std::cerr << fmt::format("  {}/{} trials, {} correct\n", t + 1, trials, correct);
-  }
-  // Misspecified tyre family (Burckhardt curve, no effect): must give none or unexplained.
-  int mis_ok = 0;
-  std::map<std::string, int> mis_said;
-  for (int t = 0; t < misspecified; ++t) {
-    const auto r = sim::run_trial(base, {"misspecified", 0.0},
-                                  500'000 + static_cast<std::uint64_t>(t), gates.options);
-    ++mis_said[r.verdict.empty() ? "?" : r.verdict.front()];
-    if (r.correct()) ++mis_ok;
+    ++n_effects;
+    if (r.correct()) ++correct_effects;
+    if (r.exact()) ++exact_effects;
+    if (std::isfinite(r.estimate))
+      mag_err[inj.effect].push_back(std::abs(r.estimate - inj.magnitude) / std::abs(inj.magnitude));
+    const double ratio = r.gap_after_n / std::max(r.noise_n, 1e-9);
+    if (r.correct()) after_over_noise.push_back(ratio);
+    after_by_effect[inj.effect].push_back(ratio);
   }
   std::vector<std::string> said_cols = labels;
   said_cols.push_back("unexplained");
+  std::cout << fmt::format("\n## {}: {} trials, {} null\n\n", cname, trials, n_none);
   std::cout << fmt::format("| injected \\ said | {} |\n|---|{}\n", fmt::join(said_cols, " | "),
                            std::string(said_cols.size() * 4, '-') + "|");
   for (const auto& l : labels) {
     std::cout << "| " << l;
-    for (const auto& c : said_cols) std::cout << " | " << confusion[l][c];
-    int other = 0;
+    for (const auto& col : said_cols) std::cout << " | " << confusion[l][col];
+    std::vector<std::string> other;
     for (const auto& [k, v] : confusion[l])
-      if (std::find(said_cols.begin(), said_cols.end(), k) == said_cols.end()) other += v;
-    std::cout << (other ? fmt::format(" (+{} other)", other) : "") << " |\n";
+      if (std::find(said_cols.begin(), said_cols.end(), k) == said_cols.end())
+        other.push_back(fmt::format("{} {}", k, v));
+    std::cout << (other.empty() ? "" : fmt::format(" (+{})", fmt::join(other, ", "))) << " |\n";
   }
   nlohmann::ordered_json j;
-  j["schema"] = "brakefit.gap_referee/1";
-  j["version"] = kVersion;
+  j["condition"] = cname;
   j["trials"] = trials;
   j["null_trials"] = n_none;
   j["gate_gain"] = gates.options.gate_gain;
   j["bic_margin"] = gates.options.bic_margin;
+  j["null_best_gain_max"] = quantile(gates.null_best_gain, 1.0);
+  j["null_best_delta_bic_min"] = quantile(gates.null_best_delta_bic, 0.0);
   j["accuracy_effects"] = n_effects ? static_cast<double>(correct_effects) / n_effects : NAN;
   j["accuracy_effects_exact"] = n_effects ? static_cast<double>(exact_effects) / n_effects : NAN;
   j["false_positive_rate_none"] = n_none ? static_cast<double>(fp_none) / n_none : NAN;
+  std::cout << fmt::format(
+      "\neffects correct: {}/{} ({:.1f} %; first verdict exactly the injected effect: {:.1f} %), "
+      "false positives on none: {}/{} ({:.1f} %)\n",
+      correct_effects, n_effects, 100.0 * correct_effects / std::max(1, n_effects),
+      100.0 * exact_effects / std::max(1, n_effects), fp_none, n_none,
+      100.0 * fp_none / std::max(1, n_none));
   for (const auto& [e, v] : mag_err) {
     const auto within = std::count_if(v.begin(), v.end(), [](double x) { return x <= 0.25; });
+    const double share = static_cast<double>(within) / static_cast<double>(v.size());
     j["magnitude_error"][e] = {
-        {"median", quantile(v, 0.5)},
-        {"p90", quantile(v, 0.9)},
-        {"within_25pct", static_cast<double>(within) / static_cast<double>(v.size())}};
+        {"median", quantile(v, 0.5)}, {"p90", quantile(v, 0.9)}, {"within_25pct", share}};
+    std::cout << fmt::format(
+        "magnitude error, {}: median {:.1f} %, p90 {:.1f} %, within 25 %: {:.0f} %\n", e,
+        100 * quantile(v, 0.5), 100 * quantile(v, 0.9), 100 * share);
   }
   j["gap_after_over_noise"] = {{"median", quantile(after_over_noise, 0.5)},
                                {"p90", quantile(after_over_noise, 0.9)}};
+  std::cout << fmt::format("gap after / noise (correct trials): median {:.2f}, p90 {:.2f}\n",
+                           quantile(after_over_noise, 0.5), quantile(after_over_noise, 0.9));
   for (const auto& [e, v] : after_by_effect) {
     std::cout << fmt::format("gap after / noise, {}: median {:.2f}, p90 {:.2f} ({} trials)\n", e,
                              quantile(v, 0.5), quantile(v, 0.9), v.size());
     j["gap_after_over_noise_by_effect"][e] = {{"median", quantile(v, 0.5)},
                                               {"p90", quantile(v, 0.9)}};
   }
-  j["misspecified_trials"] = misspecified;
-  j["misspecified_none_or_unexplained"] =
-      misspecified ? static_cast<double>(mis_ok) / misspecified : NAN;
-  j["misspecified_said"] = mis_said;
-  std::cout << fmt::format(
-      "\nmisspecified tyre (Burckhardt): none/unexplained in {}/{}; first verdicts:", mis_ok,
-      misspecified);
-  for (const auto& [k, v] : mis_said) std::cout << fmt::format(" {} {}", k, v);
-  std::cout << fmt::format(
-      "\neffects correct: {}/{} ({:.1f} %; first verdict exactly the injected effect: {:.1f} %, "
-      "the rest named with it in a cannot-separate note), false positives on none: {}/{} ({:.1f} "
-      "%)\n",
-      correct_effects, n_effects, 100.0 * correct_effects / std::max(1, n_effects),
-      100.0 * exact_effects / std::max(1, n_effects), fp_none, n_none,
-      100.0 * fp_none / std::max(1, n_none));
-  std::cout << j.dump() << "\n";
+  if (c == gap::Condition::Roller && st.misspecified > 0) {
+    // Misspecified tyre family (Burckhardt curve, no effect): must give none or unexplained.
+    const auto mis = parallel_map<sim::TrialResult>(
+        st.misspecified,
+        [&](int t) {
+          sim::Injection inj;
+          inj.effect = "misspecified";
+          return sim::run_trial(inj, 500'000 + static_cast<std::uint64_t>(t), gates.options);
+        },
+        "misspecified");
+    int ok = 0;
+    std::map<std::string, int> said;
+    for (const auto& r : mis) {
+      ++said[r.verdict.empty() ? "?" : r.verdict.front()];
+      ok += r.correct();
+    }
+    j["misspecified_trials"] = st.misspecified;
+    j["misspecified_none_or_unexplained"] = static_cast<double>(ok) / st.misspecified;
+    j["misspecified_said"] = said;
+    std::cout << fmt::format(
+        "misspecified tyre (Burckhardt): none/unexplained in {}/{}; first verdicts:", ok,
+        st.misspecified);
+    for (const auto& [k, v] : said) std::cout << fmt::format(" {} {}", k, v);
+    std::cout << "\n";
+  }
+  return j;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Settings st;
+  std::string which = "all";
+  g_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i];
+    const char* v = argv[i + 1];
+    if (k == "--trials")
+      st.trials = std::atoi(v);
+    else if (k == "--trials-other")
+      st.trials_other = std::atoi(v);
+    else if (k == "--calibrate")
+      st.calib = std::max(1, std::atoi(v));
+    else if (k == "--misspecified")
+      st.misspecified = std::atoi(v);
+    else if (k == "--null-share")
+      st.null_share = std::atof(v);
+    else if (k == "--seed")
+      st.seed = std::strtoull(v, nullptr, 10);
+    else if (k == "--threads")
+      g_threads = std::atoi(v);
+    else if (k == "--condition")
+      which = v;
+    else {
+      std::cerr << "gap_referee: unknown option " << k << "\n";
+      return 64;
+    }
+  }
+  nlohmann::ordered_json j;
+  j["schema"] = "brakefit.gap_referee/1";
+  j["version"] = kVersion;
+  j["seed"] = st.seed;
+  bool any = false;
+  for (auto c : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad}) {
+    if (which != "all" && which != gap::to_string(c)) continue;
+    any = true;
+    j["conditions"].push_back(run_condition(c, st));
+  }
+  if (!any) {
+    std::cerr << "gap_referee: --condition must be roller, ground, roller_vs_road or all\n";
+    return 64;
+  }
+  std::cout << "\n" << j.dump() << "\n";
   return 0;
 }

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 
@@ -33,13 +34,16 @@ nlohmann::ordered_json params_json(const gap::Fit& f, const std::vector<gap::Eff
 }
 
 nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::Run>& runs,
-                                   const std::string& model_hash, const std::string& mode) {
+                                   const std::string& model_hash, const std::string& mode,
+                                   gap::Condition condition, const gap::Options& gates) {
   nlohmann::ordered_json j;
   j["schema"] = "brakefit.gap/1";
   j["version"] = kVersion;
   j["model_hash"] =
       model_hash.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(model_hash);
   j["mode"] = mode;
+  j["condition"] = gap::to_string(condition);
+  j["gates"] = {{"gain", num(gates.gate_gain)}, {"bic_margin", num(gates.bic_margin)}};
   j["runs"] = nlohmann::ordered_json::array();
   for (const auto& run : runs) j["runs"].push_back(run.name);
   j["verdict"] = r.verdict;
@@ -168,7 +172,7 @@ void add_gap_command(CLI::App& app) {
     std::string report, force = "pressure", model;
     bool json = false;
     RunOptions run;
-    gap::Options gap;
+    double gate_gain = NAN, bic_margin = NAN;  ///< NaN: the calibrated gate of the condition
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand(
@@ -186,10 +190,11 @@ void add_gap_command(CLI::App& app) {
       ->check(CLI::IsMember({"pressure", "tester"}))
       ->capture_default_str();
   cmd->add_option("--model", o->model, "model for the start values (default: the shipped one)");
-  cmd->add_option("--gate-gain", o->gap.gate_gain, "minimum held-out gain to accept an effect")
-      ->capture_default_str();
-  cmd->add_option("--bic-margin", o->gap.bic_margin, "minimum BIC decrease to accept an effect")
-      ->capture_default_str();
+  cmd->add_option("--gate-gain", o->gate_gain,
+                  "minimum held-out gain to accept an effect (default: the gate calibrated on "
+                  "null data of the condition: roller, ground or roller vs road)");
+  cmd->add_option("--bic-margin", o->bic_margin,
+                  "minimum BIC decrease to accept an effect (default: calibrated, as the gain)");
   cmd->callback([o] {
     const Model model = load_model(resolve_model_path(o->model));
     o->run.pipeline.fit = false;
@@ -230,11 +235,31 @@ void add_gap_command(CLI::App& app) {
     spdlog::info("gap: {} runs, seeding the baseline with the hybrid fit of the pooled points",
                  runs.size());
     const MethodResult seed = run_method(Method::Hybrid, &model, pooled, fit_options_for(&model));
-    const gap::Report rep = transfer
-                                ? gap::diagnose_transfer(roller_runs, runs, seed.params, o->gap)
-                                : gap::diagnose(runs, seed.params, o->gap);
+    // The gates calibrated on null data of this condition (runs from one bench in mode 1).
+    gap::Condition condition = gap::Condition::RollerToRoad;
+    if (!transfer) {
+      condition = runs.empty() || runs.front().bench == can::BenchKind::Roller
+                      ? gap::Condition::Roller
+                      : gap::Condition::Ground;
+      for (const auto& r : runs)
+        if (r.bench != runs.front().bench)
+          throw ExitError(kExitDataError,
+                          fmt::format("gap: {} is from a {} bench and {} from a {} bench; give "
+                                      "runs of one bench, or --roller and --road",
+                                      runs.front().name, can::to_string(runs.front().bench), r.name,
+                                      can::to_string(r.bench)));
+    }
+    gap::Options gap_options = gap::calibrated_options(condition);
+    if (std::isfinite(o->gate_gain)) gap_options.gate_gain = o->gate_gain;
+    if (std::isfinite(o->bic_margin)) gap_options.bic_margin = o->bic_margin;
+    spdlog::info("gap: condition {}, gates: held-out gain >= {:.3f}, BIC drop >= {:.1f}",
+                 gap::to_string(condition), gap_options.gate_gain, gap_options.bic_margin);
+    const gap::Report rep =
+        transfer ? gap::diagnose_transfer(roller_runs, runs, seed.params, gap_options)
+                 : gap::diagnose(runs, seed.params, gap_options);
     const auto doc =
-        report_json(rep, runs, model.hash, transfer ? "roller_vs_road" : "model_vs_measurement");
+        report_json(rep, runs, model.hash, transfer ? "roller_vs_road" : "model_vs_measurement",
+                    condition, gap_options);
     if (!o->report.empty()) {
       write_report(o->report, rep, runs, doc);
       spdlog::info("report written to {}/index.html", o->report);

@@ -14,30 +14,82 @@ namespace {
 struct Range {
   const char* effect;
   double lo, hi;
+  bool either_sign = false;
 };
-const std::vector<Range>& ranges() {
-  static const std::vector<Range> r = {{"relaxation_length", 0.05, 0.4},
-                                       {"wheel_inertia", 0.5, 3.0},
-                                       {"brake_threshold", 1.0, 5.0},
-                                       {"time_offset", 0.01, 0.05}};
-  return r;
+const std::vector<Range>& ranges(gap::Condition c) {
+  static const std::vector<Range> roller = {{"relaxation_length", 0.05, 0.4},
+                                            {"wheel_inertia", 0.5, 3.0},
+                                            {"brake_threshold", 1.0, 5.0},
+                                            {"time_offset", 0.01, 0.05},
+                                            {"slip_offset", 0.002, 0.01, true}};
+  // On flat ground (40 km/h, 0.2-0.6 s stops) the same five; load transfer and speed friction
+  // are drawn only against the roller: on one bench the deceleration is the braking force over
+  // the vehicle's mass and the slip speed is slip x a nearly constant speed, so both reshape the
+  // curve as a function of slip alone and B, C, D, E absorb them (see docs/gap.md).
+  static const std::vector<Range> ground = {{"relaxation_length", 0.1, 0.5},
+                                            {"wheel_inertia", 0.5, 3.0},
+                                            {"brake_threshold", 1.0, 5.0},
+                                            {"time_offset", 0.005, 0.03},
+                                            {"slip_offset", 0.002, 0.01, true}};
+  static const std::vector<Range> transfer = {
+      {"roller_friction", 1.1, 1.6}, {"load_transfer", 0.015, 0.05}, {"speed_friction", 0.3, 2.0}};
+  switch (c) {
+    case gap::Condition::Roller:
+      return roller;
+    case gap::Condition::Ground:
+      return ground;
+    case gap::Condition::RollerToRoad:
+      return transfer;
+  }
+  return roller;
+}
+
+/// d ln D / d ln Fz of the simulated tyre at the scenario's load: the load transfer's effect on
+/// D (the diagnosis parameter) per unit of relative load change.
+double d_ln_d_per_ln_fz(const Scenario& s) {
+  TyreState a;
+  a.fz_n = s.wheel_load_n;
+  a.pressure_bar = s.tyre_pressure_bar;
+  TyreState b = a;
+  b.fz_n *= 1.01;
+  return std::log(pac96_equivalent(s.tyre, b).D / pac96_equivalent(s.tyre, a).D) / std::log(1.01);
+}
+
+bool is_transfer_roller_effect(const Injection& inj) {
+  return inj.condition == gap::Condition::RollerToRoad && inj.effect == "roller_friction";
 }
 
 }  // namespace
 
-const std::vector<std::string>& referee_effects() {
-  static const std::vector<std::string> names = [] {
-    std::vector<std::string> n;
-    for (const auto& r : ranges()) n.push_back(r.effect);
-    return n;
-  }();
-  return names;
+Scenario referee_null(can::BenchKind bench) {
+  Scenario s;
+  s.bench = bench;
+  s.effects = Effects{};
+  s.effects.wheel_inertia = true;
+  s.wheel_inertia_kgm2 = 0.005;
+  s.effects.pressure_noise_bar = 0.05;
+  return s;
 }
 
-Injection draw_injection(Rng& rng, double p_none) {
-  if (rng.uniform() < p_none) return {};
-  const auto& r = ranges()[rng.index(ranges().size())];
-  return {r.effect, rng.uniform(r.lo, r.hi)};
+const std::vector<std::string>& referee_effects(gap::Condition c) {
+  static const auto names = [] {
+    std::vector<std::vector<std::string>> n(3);
+    for (auto cond : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad})
+      for (const auto& r : ranges(cond)) n[static_cast<std::size_t>(cond)].push_back(r.effect);
+    return n;
+  }();
+  return names[static_cast<std::size_t>(c)];
+}
+
+Injection draw_injection(Rng& rng, double p_none, gap::Condition c) {
+  Injection inj;
+  inj.condition = c;
+  if (rng.uniform() < p_none) return inj;
+  const auto& r = ranges(c)[rng.index(ranges(c).size())];
+  inj.effect = r.effect;
+  inj.magnitude = rng.uniform(r.lo, r.hi);
+  if (r.either_sign && rng.uniform() < 0.5) inj.magnitude = -inj.magnitude;
+  return inj;
 }
 
 Scenario inject(Scenario s, const Injection& inj) {
@@ -48,6 +100,18 @@ Scenario inject(Scenario s, const Injection& inj) {
   }
   if (inj.effect == "brake_threshold") s.effects.brake_threshold_bar = inj.magnitude;
   if (inj.effect == "time_offset") s.effects.time_offset_s = inj.magnitude;
+  // Measured slip 1 - (1 + e) Vw / Vref = k - e (1 - k): an offset of -e (the (1 - k) part is a
+  // slip scale, which B takes).
+  if (inj.effect == "slip_offset") s.effects.wheel_radius_error_ratio = -inj.magnitude;
+  if (inj.effect == "load_transfer") {
+    // dFz / Fz = m h / (2 L W) x deceleration (one axle's share on the tested wheel), and D follows
+    // Fz with the tyre's own load sensitivity.
+    s.effects.load_transfer = true;
+    s.cg_height_m = inj.magnitude / d_ln_d_per_ln_fz(s) * 2.0 * s.wheelbase_m * s.wheel_load_n /
+                    s.vehicle_mass_kg;
+  }
+  if (inj.effect == "speed_friction") s.effects.speed_friction = inj.magnitude;
+  if (inj.effect == "roller_friction") s.effects.roller_friction = 1.0 / inj.magnitude;
   if (inj.effect == "misspecified") s.tyre.family = TyreMf61::Family::Burckhardt;
   return s;
 }
@@ -55,7 +119,12 @@ Scenario inject(Scenario s, const Injection& inj) {
 std::vector<gap::Run> simulate_runs(const Scenario& base, std::uint64_t seed, MfParams* truth) {
   std::vector<gap::Run> out;
   std::uint64_t k = 0;
-  for (const char* ramp : {"slow", "medium", "fast"}) {
+  const bool ground = base.bench == can::BenchKind::Ground;
+  // On flat ground a slow pedal stops the car before the wheel locks: emergency-stop ramps.
+  const std::vector<std::string> ramps = ground
+                                             ? std::vector<std::string>{"100", "150", "250"}
+                                             : std::vector<std::string>{"slow", "medium", "fast"};
+  for (const auto& ramp : ramps) {
     Scenario s = base;
     s.pedal_ramp = ramp;
     s.ramp_bar_per_s = ramp_rate_bar_per_s(ramp);
@@ -106,13 +175,9 @@ bool TrialResult::correct() const {
   return false;
 }
 
-TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t seed,
-                      const gap::Options& o) {
-  const Scenario s = inject(base, inj);
-  const auto runs = simulate_runs(s, seed);
-  // Blinded: the diagnosis sees the runs only (start values from a least-squares fit of their
-  // pooled points, as `brakefit gap` does without a model).
-  const gap::Report rep = gap::diagnose(runs, pooled_start(runs), o);
+namespace {
+
+TrialResult score(const Injection& inj, const gap::Report& rep) {
   TrialResult t;
   t.truth = inj;
   t.verdict = rep.verdict;
@@ -126,15 +191,51 @@ TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t 
   return t;
 }
 
-GateCalibration calibrate_gates(const Scenario& base, int n, std::uint64_t seed0,
+/// Blinded: the diagnosis sees the runs only (start values from a least-squares fit of their
+/// pooled points, as `brakefit gap` does without a model).
+gap::Report diagnose_blind(gap::Condition c, const Injection& inj, std::uint64_t seed,
+                           const gap::Options& o) {
+  if (c != gap::Condition::RollerToRoad) {
+    const auto runs =
+        simulate_runs(inject(referee_null(c == gap::Condition::Ground ? can::BenchKind::Ground
+                                                                      : can::BenchKind::Roller),
+                             inj),
+                      seed);
+    return gap::diagnose(runs, pooled_start(runs), o);
+  }
+  Scenario roller = referee_null(can::BenchKind::Roller);
+  Scenario road = referee_null(can::BenchKind::Ground);
+  if (is_transfer_roller_effect(inj))
+    roller = inject(roller, inj);
+  else
+    road = inject(road, inj);
+  const auto roller_runs = simulate_runs(roller, seed);
+  const auto road_runs = simulate_runs(road, seed + 7'777'777);
+  return gap::diagnose_transfer(roller_runs, road_runs, pooled_start(roller_runs), o);
+}
+
+}  // namespace
+
+TrialResult run_trial(const Injection& inj, std::uint64_t seed, const gap::Options& o) {
+  return score(inj, diagnose_blind(inj.condition, inj, seed, o));
+}
+
+TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t seed,
+                      const gap::Options& o) {
+  const auto runs = simulate_runs(inject(base, inj), seed);
+  return score(inj, gap::diagnose(runs, pooled_start(runs), o));
+}
+
+GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
                                 const gap::Options& start) {
   GateCalibration g;
   g.options = start;
   gap::Options probe = start;
   probe.gate_gain = 1e9;  // accept nothing: we want the best candidate's scores on null data
   for (int i = 0; i < n; ++i) {
-    const auto runs = simulate_runs(base, seed0 + static_cast<std::uint64_t>(i));
-    const gap::Report rep = gap::diagnose(runs, pooled_start(runs), probe);
+    Injection none;
+    none.condition = c;
+    const gap::Report rep = diagnose_blind(c, none, seed0 + static_cast<std::uint64_t>(i), probe);
     double best_gain = -1e9, best_bic = 1e9;
     for (const auto& e : rep.effects) {
       best_gain = std::max(best_gain, e.gain);

@@ -1,7 +1,9 @@
 #pragma once
 // The blinded-injection referee of the gap diagnosis: draw an effect (or none) and a magnitude,
-// simulate a set of runs at three pedal ramp rates, hide the label, diagnose, score. Also the gate
-// calibration on null data (seeds disjoint from the referee's).
+// simulate a set of runs at three pedal ramp rates, hide the label, diagnose, score. Three
+// conditions: model vs measurement on the roller (5 km/h) and on flat ground (40 km/h), and roller
+// vs road (the transfer effects). Also the gate calibration on null data (seeds disjoint from the
+// referee's), per condition.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -12,18 +14,24 @@
 
 namespace brakefit::sim {
 
+/// The null of every referee condition: every effect off, a wheel inertia whose signature stays
+/// below the force noise (0.005 kg m^2), pressure noise 0.05 bar, ideal encoders.
+Scenario referee_null(can::BenchKind bench);
+
 struct Injection {
-  std::string effect = "none";  ///< gap effect name, or "none"
+  std::string effect = "none";  ///< gap effect name, "none" or "misspecified"
   double magnitude = 0.0;       ///< in the diagnosis parameter's unit (sigma_m, p0_bar, ...)
+  gap::Condition condition = gap::Condition::Roller;
 };
 
-/// The effects the referee draws (besides none) and their magnitude ranges.
-const std::vector<std::string>& referee_effects();
-Injection draw_injection(Rng& rng, double p_none);
-/// The scenario with the injection switched on (everything else as in base).
+/// The effects the referee draws in a condition (besides none) and their magnitude ranges.
+const std::vector<std::string>& referee_effects(gap::Condition c);
+Injection draw_injection(Rng& rng, double p_none, gap::Condition c = gap::Condition::Roller);
+/// The scenario with the injection switched on (everything else as in base). In the transfer
+/// condition roller_friction goes to the roller scenario, the others to the road.
 Scenario inject(Scenario base, const Injection& inj);
-/// Runs at the slow, medium and fast pedal ramps, conditioned for the diagnosis.
-/// truth: the tyre's Pac96 equivalent, when wanted.
+/// Runs at three pedal ramps (roller: slow, medium, fast; ground: 100, 150, 250 bar/s),
+/// conditioned for the diagnosis. truth: the tyre's Pac96 equivalent, when wanted.
 std::vector<gap::Run> simulate_runs(const Scenario& s, std::uint64_t seed,
                                     MfParams* truth = nullptr);
 
@@ -41,6 +49,9 @@ struct TrialResult {
   bool correct() const;
   bool exact() const;  ///< the first verdict is the injected effect (or ["none"])
 };
+/// Simulates the injection in its condition (from referee_null), diagnoses blind, scores.
+TrialResult run_trial(const Injection& inj, std::uint64_t seed, const gap::Options& o);
+/// The same from a given base (model vs measurement conditions only).
 TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t seed,
                       const gap::Options& o);
 
@@ -48,9 +59,9 @@ struct GateCalibration {
   gap::Options options;
   std::vector<double> null_best_gain, null_best_delta_bic;
 };
-/// Diagnoses n null sets (seeds seed0, seed0+1, ...) and sets the gates above what they show:
-/// gain gate = max(min_gain, 1.5 x the largest best-candidate gain), BIC margin likewise.
-GateCalibration calibrate_gates(const Scenario& base, int n, std::uint64_t seed0,
+/// Diagnoses n null sets of a condition (seeds seed0, seed0+1, ...) and sets the gates above what
+/// they show: gain gate = max(start gate, 1.5 x the largest best-candidate gain), BIC likewise.
+GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
                                 const gap::Options& start);
 
 }  // namespace brakefit::sim
