@@ -140,7 +140,9 @@ tr.ok{{background:#e6f4e6}}</style></head><body>
 <p>Runs: {}</p>
 <h2>Verdict: {}</h2>
 <p>Held-out gap (leave one run out): <b>{:.1f} N</b> before, <b>{:.1f} N</b> after ({:.0f} % explained);
-force noise {:.1f} N.</p>
+force noise {:.1f} N. Condition <b>{}</b>: an effect is accepted when its held-out gain is at
+least {:.3f} and its BIC drops by at least {:.1f} (gates calibrated on null data of this
+condition).</p>
 <ul>{}</ul>
 <h2>Which effect (each candidate alone on the baseline, then forward selection)</h2>
 <table><tr><th>effect</th><th>parameters</th><th>held-out before [N]</th><th>after [N]</th><th>gain</th><th>ΔBIC</th><th>accepted</th></tr>
@@ -160,7 +162,8 @@ force noise {:.1f} N.</p>
       plot::xml_escape(fmt::format("{}", fmt::join(r.verdict, ", "))), r.gap_before_rmse_n,
       r.gap_after_rmse_n,
       r.gap_before_rmse_n > 0 ? 100 * (1 - r.gap_after_rmse_n / r.gap_before_rmse_n) : 0.0,
-      r.noise_n, notes, rows, where, kVersion);
+      r.noise_n, doc["condition"].get<std::string>(), doc["gates"]["gain"].get<double>(),
+      doc["gates"]["bic_margin"].get<double>(), notes, rows, where, kVersion);
   write_file(dir + "/index.html", html);
 }
 

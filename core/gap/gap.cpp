@@ -1,6 +1,7 @@
 #include "core/gap/gap.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -748,14 +749,28 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
         "road run it was not fitted to)");
   Report rep;
   rep.noise_n = noise_of(road);
-  const Fit roller_fit = fit_runs(pointers(roller), {}, start);
+  // The roller's own effects (relaxation, inertia, threshold...) would bend its B, C, D, E: with
+  // two or more roller runs they are diagnosed first (model vs measurement, roller gates) and the
+  // corrected parameters are what the roller says about the tyre.
+  Fit roller_fit = fit_runs(pointers(roller), {}, start);
+  if (roller.size() >= 2) {
+    const Report own = diagnose(roller, start, calibrated_options(Condition::Roller, o));
+    roller_fit = own.after;
+    std::vector<std::string> names;
+    for (Effect e : own.accepted) names.push_back(to_string(e));
+    if (!names.empty())
+      rep.notes.push_back(fmt::format(
+          "the roller runs were corrected for their own {} before their B, C, D, E were carried to "
+          "the road",
+          fmt::join(names, ", ")));
+  }
   const MfParams base{
       roller_fit.params[0], roller_fit.params[1], roller_fit.params[2], roller_fit.params[3], 0, 0};
   const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
     return fit_effects(train, e, base);  // the roller's B, C, D, E held
   };
   rep.before = fit(pointers(road), {});  // the roller's parameters on the road
-  rep.before.stderr_ = roller_fit.stderr_;
+  rep.before.stderr_.assign(roller_fit.stderr_.begin(), roller_fit.stderr_.begin() + 4);
   rep.gap_before_rmse_n = heldout(road, {}, fit);
   rep.where = where_rows(road, rep.before.params);
   select_effects(rep, road, kTransferEffects, fit, o,

@@ -188,6 +188,13 @@ class Gap(unittest.TestCase):
             self.assertAlmostEqual(relax["params"]["sigma_m"], 0.2, delta=0.05)
             self.assertIn("sigma_m", doc["parameters_after"])
             self.assertLess(doc["gap_after_rmse_n"], 0.5 * doc["gap_before_rmse_n"])
+            # Roller runs: the roller's null-calibrated gates; what is left after the accepted
+            # effects is near the force noise (measured 3.9 N against 3.2 N).
+            self.assertEqual(doc["condition"], "roller")
+            self.assertGreaterEqual(doc["gates"]["gain"], 0.1)
+            self.assertLess(doc["gap_after_rmse_n"], 1.5 * doc["noise_n"])
+            with open(os.path.join(d, "index.html")) as f:
+                self.assertIn("Condition <b>roller</b>", f.read())
             self.assertAlmostEqual(sum(w["share"] for w in doc["where"] if not ":" in w["region"]), 1.0, 6)
             for f in ("index.html", "residual.svg", "curves.svg", "gap.json"):
                 self.assertTrue(os.path.exists(os.path.join(d, f)), f)
@@ -198,6 +205,13 @@ class Gap(unittest.TestCase):
         self.assertEqual(r.returncode, 65)
         self.assertIn("at least two runs", r.stderr)
 
+    def test_runs_of_two_benches_are_refused_in_mode_1(self):
+        r = run("gap", os.path.join(REC, "roller_2p2bar_fast.log"),
+                os.path.join(REC, "ground_2p2bar_150barps.log"))
+        self.assertEqual(r.returncode, 65)
+        self.assertIn("--roller and --road", r.stderr)
+        self.assertIn("ground_2p2bar_150barps", r.stderr)
+
     def test_roller_vs_road_ranks_the_transfer_effects(self):
         roller = sorted(glob.glob(os.path.join(REC, "roller_2p2bar_*.log")))
         road = sorted(glob.glob(os.path.join(REC, "ground_2p2bar_*.log")))
@@ -206,6 +220,9 @@ class Gap(unittest.TestCase):
         doc = json.loads(r.stdout)
         self.assertEqual(doc["schema"], "brakefit.gap/1")
         self.assertEqual(doc["mode"], "roller_vs_road")
+        self.assertEqual(doc["condition"], "roller_vs_road")
+        # The roller runs are corrected for their own effects before their B, C, D, E travel.
+        self.assertTrue(any("corrected for their own" in n for n in doc["notes"]), doc["notes"])
         names = {e["name"] for e in doc["effects"]}
         for required in ("load_transfer", "speed_friction", "roller_friction"):
             self.assertIn(required, names)
