@@ -98,6 +98,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
   // Draws first (one generator, in order), then the trials in parallel.
   Rng rng(st.seed + 100 * static_cast<std::uint64_t>(c));
   std::vector<sim::Injection> draws;
+  draws.reserve(static_cast<std::size_t>(std::max(0, trials)));
   for (int t = 0; t < trials; ++t) draws.push_back(sim::draw_injection(rng, st.null_share, c));
   const auto results = parallel_map<sim::TrialResult>(
       trials,
@@ -183,13 +184,14 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
     j["gap_after_over_noise_by_effect"][e] = {{"median", quantile(v, 0.5)},
                                               {"p90", quantile(v, 0.9)}};
   }
-  if (c == gap::Condition::Roller && st.misspecified > 0) {
+  if (st.misspecified > 0) {
     // Misspecified tyre family (Burckhardt curve, no effect): must give none or unexplained.
     const auto mis = parallel_map<sim::TrialResult>(
         st.misspecified,
         [&](int t) {
           sim::Injection inj;
           inj.effect = "misspecified";
+          inj.condition = c;
           return sim::run_trial(inj, 500'000 + static_cast<std::uint64_t>(t), gates.options);
         },
         "misspecified");
@@ -211,9 +213,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
   return j;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   Settings st;
   std::string which = "all";
   g_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -257,4 +257,15 @@ int main(int argc, char** argv) {
   }
   std::cout << "\n" << j.dump() << "\n";
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "gap_referee: " << e.what() << "\n";
+    return 70;
+  }
 }

@@ -22,10 +22,10 @@ namespace {
 
 nlohmann::ordered_json params_json(const gap::Fit& f, const std::vector<gap::Effect>& effects) {
   nlohmann::ordered_json j;
-  const char* names[4] = {"B", "C", "D", "E"};
+  const auto names = gap::param_names(effects);
   nlohmann::ordered_json se;
-  for (std::size_t i = 0; i < f.params.size(); ++i) {
-    const std::string name = i < 4 ? names[i] : gap::effect_param(effects[i - 4]).name;
+  for (std::size_t i = 0; i < f.params.size() && i < names.size(); ++i) {
+    const std::string& name = names[i];
     j[name] = num(f.params[i]);
     se[name] = i < f.stderr_.size() ? num(f.stderr_[i]) : nullptr;
   }

@@ -16,11 +16,11 @@ namespace brakefit::gap {
 // Gates (see calibrated_options): max(0.10, 1.5 x the largest null gain) and max(10, 1.5 x the
 // largest null BIC drop) over 30 null sets per condition (bench/gap_referee --calibrate 30).
 // Null maxima measured 2026-11-21: roller gain 0.005, dBIC -2.4; ground 0.013, -10.1; roller vs
-// road 0.128, -281.3 (the roller fit carried to the road leaves a small bias every transfer
+// road 0.146, -305.8 (the roller fit carried to the road leaves a small bias every transfer
 // candidate nibbles at).
 constexpr double kRollerGateGain = 0.10, kRollerBicMargin = 10.0;
 constexpr double kGroundGateGain = 0.10, kGroundBicMargin = 16.0;
-constexpr double kTransferGateGain = 0.20, kTransferBicMargin = 425.0;
+constexpr double kTransferGateGain = 0.22, kTransferBicMargin = 460.0;
 
 const char* to_string(Effect e) {
   switch (e) {
@@ -35,6 +35,7 @@ const char* to_string(Effect e) {
     case Effect::SlipOffset:
       return "slip_offset";
     case Effect::LoadTransfer:
+    case Effect::LoadTransferShape:
       return "load_transfer";
     case Effect::SpeedFriction:
       return "speed_friction";
@@ -75,6 +76,33 @@ Options calibrated_options(Condition c, Options base) {
   return base;
 }
 
+std::vector<EffectParam> effect_params(Effect e) {
+  // q scales the peak D by 1 + q x deceleration; the slip stiffness B C D scales by
+  // (1 + q x deceleration)^r: a tyre's stiffness and peak grow differently with load (MF 6.1:
+  // PKX1-3 vs PDX1-2; r 1.3 for the simulated TNO 205/60R15), and one ratio for both misread q by
+  // 40 %. Against a held curve E moves with the load as well (PEX2: E += e x relative load).
+  if (e == Effect::LoadTransfer)
+    return {{"dfz_per_decel_s2_per_m", -0.2, 0.2, 0.0}, {"kx_load_ratio", 0.0, 3.0, 1.0}};
+  if (e == Effect::LoadTransferShape)
+    return {{"dfz_per_decel_s2_per_m", -0.2, 0.2, 0.0},
+            {"kx_load_ratio", 0.0, 3.0, 1.0},
+            {"e_per_load", -2.0, 2.0, 0.0}};
+  return {effect_param(e)};
+}
+
+std::size_t param_count(const std::vector<Effect>& effects) {
+  std::size_t n = 4;
+  for (Effect e : effects) n += effect_params(e).size();
+  return n;
+}
+
+std::vector<std::string> param_names(const std::vector<Effect>& effects) {
+  std::vector<std::string> names{"B", "C", "D", "E"};
+  for (Effect e : effects)
+    for (const auto& p : effect_params(e)) names.emplace_back(p.name);
+  return names;
+}
+
 EffectParam effect_param(Effect e) {
   switch (e) {
     case Effect::RelaxationLength:
@@ -88,6 +116,7 @@ EffectParam effect_param(Effect e) {
     case Effect::SlipOffset:
       return {"slip_offset_ratio", -0.05, 0.05, 0.0};
     case Effect::LoadTransfer:
+    case Effect::LoadTransferShape:
       return {"dfz_per_decel_s2_per_m", -0.2, 0.2, 0.0};
     case Effect::SpeedFriction:
       return {"lambda_mu_v", 0.0, 20.0, 0.1};
@@ -145,7 +174,7 @@ double interp(const std::vector<double>& t, const std::vector<double>& x, double
 }  // namespace
 
 /// The initial slip rate is fitted over this much of the run's start.
-constexpr double kInitialWindowS = 0.1;
+constexpr double kInitialWindowS = 0.04;
 /// Past this slip the wheel is taken as locked.
 constexpr double kLockSlip = 0.9;
 /// A lock-up runaway starts past the linear region: jumps below this slip are noise.
@@ -321,14 +350,18 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   std::vector<double> d_scale(n, 1.0);
   std::vector<double> b_scale(n, 1.0);
   std::vector<double> add(n, 0.0);
+  std::vector<double> e_add(n, 0.0);
   // The force-side effects first; the slip-side ones (relaxation, slip offset, time offset) are
   // then applied in that order whatever the order of `effects` (they commute but for the initial
   // state of the relaxation, which needs the force side).
   double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0;
   bool relaxation = false, threshold = false;
-  for (std::size_t k = 0; k < effects.size(); ++k) {
-    const double q = p[4 + k];
-    switch (effects[k]) {
+  std::size_t next = 4;  // index of the current effect's first parameter in p
+  for (const Effect effect : effects) {
+    const double q = p[next];
+    const std::size_t first = next;
+    next += effect_params(effect).size();
+    switch (effect) {
       case Effect::TimeOffset:  // the force channel is late by dt: it shows the tyre at t - dt
         dt_s = q;
         break;
@@ -347,9 +380,19 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
         for (std::size_t i = 0; i < n; ++i)
           add[i] -= q * r.wheel_accel_mps2[i] / (r.wheel_radius_m * r.wheel_radius_m);
         break;
-      case Effect::LoadTransfer:  // Fz (and D) grow with the measured deceleration
-        for (std::size_t i = 0; i < n; ++i) d_scale[i] *= 1.0 + q * r.ref_decel_mps2[i];
+      case Effect::LoadTransfer:
+      case Effect::LoadTransferShape: {  // Fz grows with the measured deceleration: D by 1 + q a,
+                                         // B C D by (1 + q a)^r, E by e q a
+        const double ratio = p[first + 1];
+        const double e_slope = effect == Effect::LoadTransferShape ? p[first + 2] : 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+          const double load = std::max(0.05, 1.0 + q * r.ref_decel_mps2[i]);
+          d_scale[i] *= load;
+          b_scale[i] *= std::pow(load, ratio - 1.0);
+          e_add[i] += e_slope * (load - 1.0);
+        }
         break;
+      }
       case Effect::SpeedFriction:  // lambda_mu* = 1 / (1 + LMUV Vs / V0), Vs = slip * V
         for (std::size_t i = 0; i < n; ++i) {
           const double mu = 1.0 / (1.0 + q * std::abs(r.slip[i]) * r.v_ref_mps[i] / kLongVl);
@@ -396,6 +439,7 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
     MfParams m = base;
     m.D *= d_scale[i];
     m.B *= b_scale[i];
+    m.E = std::min(m.E + e_add[i], 1.0);
     f[i] = mf_force_n(m, slip[i]) + add[i];
     // Brake threshold: gain p = Tb/R + gain p0 while the brake bites; below p0 the pads give no
     // torque and the measured pressure can be anything up to p0: gain min(p, p0) is added.
@@ -458,7 +502,7 @@ class GapProblem final : public fit::LeastSquaresProblem {
 
 Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
              const MfParams& start) {
-  const auto np = static_cast<Eigen::Index>(4 + effects.size());
+  const auto np = static_cast<Eigen::Index>(param_count(effects));
   double peak = 0;
   for (const Run* r : runs)
     for (double f : r->force_n) peak = std::max(peak, std::abs(f));
@@ -466,13 +510,13 @@ Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& eff
   lo.head(4) << 0.1, 0.3, 0.0, -20.0;
   hi.head(4) << 200.0, 3.0, 5.0 * peak, 1.0;
   x0.head(4) << start.B, start.C, start.D, start.E;
-  for (std::size_t k = 0; k < effects.size(); ++k) {
-    const EffectParam ep = effect_param(effects[k]);
-    const auto i = static_cast<Eigen::Index>(4 + k);
-    lo(i) = ep.lo;
-    hi(i) = ep.hi;
-    x0(i) = ep.start;
-  }
+  Eigen::Index i = 4;
+  for (Effect e : effects)
+    for (const EffectParam& ep : effect_params(e)) {
+      lo(i) = ep.lo;
+      hi(i) = ep.hi;
+      x0(i++) = ep.start;
+    }
   GapProblem problem(runs, effects);
   fit::LmOptions lm;
   lm.max_iterations = 100;
@@ -502,15 +546,15 @@ Fit fit_effects(const std::vector<const Run*>& runs, const std::vector<Effect>& 
     }
     return out;
   }
-  const auto np = static_cast<Eigen::Index>(effects.size());
+  const auto np = static_cast<Eigen::Index>(param_count(effects) - 4);
   Eigen::VectorXd lo(np), hi(np), x0(np);
-  for (std::size_t k = 0; k < effects.size(); ++k) {
-    const EffectParam ep = effect_param(effects[k]);
-    const auto i = static_cast<Eigen::Index>(k);
-    lo(i) = ep.lo;
-    hi(i) = ep.hi;
-    x0(i) = ep.start;
-  }
+  Eigen::Index i = 0;
+  for (Effect e : effects)
+    for (const EffectParam& ep : effect_params(e)) {
+      lo(i) = ep.lo;
+      hi(i) = ep.hi;
+      x0(i++) = ep.start;
+    }
   GapProblem problem(runs, effects, b);
   fit::LmOptions lm;
   lm.max_iterations = 100;
@@ -561,6 +605,7 @@ double noise_of(const std::vector<Run>& runs) {
 
 std::vector<const Run*> pointers(const std::vector<Run>& runs) {
   std::vector<const Run*> out;
+  out.reserve(runs.size());
   for (const Run& r : runs) out.push_back(&r);
   return out;
 }
@@ -647,7 +692,9 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
       s.gain = 1.0 - s.heldout_rmse_after_n / std::max(current_heldout, 1e-12);
       Fit f = fit(all, model);
       s.delta_bic = f.bic() - current_fit.bic();
-      s.params.emplace_back(effect_param(e).name, f.params.back());
+      const auto eps = effect_params(e);
+      for (std::size_t j = 0; j < eps.size(); ++j)
+        s.params.emplace_back(eps[j].name, f.params[f.params.size() - eps.size() + j]);
       scores.push_back(s);
       fits.push_back(std::move(f));
     }
@@ -658,13 +705,17 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
               [&](std::size_t a, std::size_t b) { return scores[a].gain > scores[b].gain; });
     EffectScore& best = scores[order[0]];
     best.accepted = best.gain >= o.gate_gain && best.delta_bic <= -o.bic_margin;
-    const EffectParam bp = effect_param(best.effect);
-    if (best.accepted && at_bound(fits[order[0]].params.back(), bp.lo, bp.hi)) {
+    // Every parameter of the effect inside its physical range (a misspecified curve on the
+    // ground was taken for load transfer with the stiffness ratio at its end, 3).
+    const auto bps = effect_params(best.effect);
+    for (std::size_t j = 0; best.accepted && j < bps.size(); ++j) {
+      const double v = best.params[j].second;
+      if (!at_bound(v, bps[j].lo, bps[j].hi)) continue;
       best.accepted = false;
       rep.notes.push_back(
           fmt::format("{} would explain part of the residual only with {} at the "
                       "end of its physical range ({:.4g}): not accepted",
-                      to_string(best.effect), bp.name, fits[order[0]].params.back()));
+                      to_string(best.effect), bps[j].name, v));
     }
     if (order.size() > 1) {
       const EffectScore& second = scores[order[1]];
@@ -737,6 +788,13 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
   select_effects(rep, runs, kAllEffects, fit, o,
                  "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at "
                  "other speeds or ramp rates would");
+  if (std::find(rep.accepted.begin(), rep.accepted.end(), Effect::LoadTransfer) !=
+      rep.accepted.end())
+    rep.notes.push_back(
+        "on one bench the deceleration follows the braking force, so load transfer reshapes the "
+        "curve as a function of slip alone: a tyre whose curve is not a Magic Formula can look "
+        "like it (checked here: its stiffness ratio is inside its range); roller runs without "
+        "deceleration (--roller/--road) separate the two");
   return rep;
 }
 

@@ -21,15 +21,19 @@ enum class Effect {
   SlipOffset,
   LoadTransfer,
   SpeedFriction,
-  RollerFriction  ///< bench vs bench only: road/roller friction ratio scales D
+  RollerFriction,  ///< bench vs bench only: road/roller friction ratio scales D
+  /// Bench vs bench only: load transfer against the roller's held curve, where its effect on the
+  /// curve's shape (E) is identifiable too (with B, C, D, E free, E absorbs it). Named
+  /// "load_transfer" like LoadTransfer.
+  LoadTransferShape
 };
 inline constexpr std::array<Effect, 7> kAllEffects = {
     Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia, Effect::BrakeThreshold,
     Effect::SlipOffset,       Effect::LoadTransfer, Effect::SpeedFriction};
 /// The transfer effects of bench-vs-bench mode (roller fit -> road runs).
 inline constexpr std::array<Effect, 6> kTransferEffects = {
-    Effect::RollerFriction,   Effect::LoadTransfer, Effect::SpeedFriction,
-    Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia};
+    Effect::RollerFriction,   Effect::LoadTransferShape, Effect::SpeedFriction,
+    Effect::RelaxationLength, Effect::TimeOffset,        Effect::WheelInertia};
 const char* to_string(Effect e);
 
 /// Where the runs come from: model vs measurement on a roller bench (5 km/h) or on flat ground
@@ -42,7 +46,12 @@ struct EffectParam {
   const char* name;  ///< SI name, e.g. "sigma_m"
   double lo, hi, start;
 };
-EffectParam effect_param(Effect e);
+EffectParam effect_param(Effect e);  ///< the first parameter: the effect's magnitude
+/// All parameters of an effect (load transfer has two: its magnitude and the stiffness ratio).
+std::vector<EffectParam> effect_params(Effect e);
+std::size_t param_count(const std::vector<Effect>& effects);  ///< 4 + the effects' parameters
+/// B, C, D, E and the effects' parameter names, in the order of Fit::params.
+std::vector<std::string> param_names(const std::vector<Effect>& effects);
 
 /// One conditioned run (a brake event), decimated for fitting.
 struct Run {
@@ -55,7 +64,7 @@ struct Run {
   std::vector<double> ref_decel_mps2;    ///< -d v_ref / dt
   std::vector<double> pressure_rate_bar_per_s;
   double noise_n = 0.0;  ///< measurement noise of the force, estimated before decimation
-  /// Slip rate at the start of the run (least squares over its first 100 ms, full rate): before
+  /// Slip rate at the start of the run (least squares over its first 40 ms, full rate): before
   /// the event the slip is taken as the ramp from zero at this rate (time offset).
   double initial_slip_rate_per_s = 0.0;
   /// Force at the first sample (a line through the first 20 ms): sets the relaxation's initial
@@ -74,12 +83,12 @@ struct ConditionOptions {
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o);
 
-/// Predicted measured force for parameters {B, C, D, E, one per effect}.
+/// Predicted measured force for parameters {B, C, D, E, then each effect's parameters}.
 std::vector<double> predict(const Run& r, const std::vector<double>& params,
                             const std::vector<Effect>& effects);
 
 struct Fit {
-  std::vector<double> params;  ///< B, C, D, E, then the effects' parameters
+  std::vector<double> params;  ///< B, C, D, E, then the effects' parameters (param_names)
   std::vector<double> stderr_;
   double ssr = 0.0;
   std::size_t points = 0;

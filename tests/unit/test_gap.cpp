@@ -35,6 +35,42 @@ void print(const gap::Report& r) {
 
 }  // namespace
 
+TEST(GapCondition, NoiseAlignmentStartStateAndLockCutOnASyntheticStop) {
+  // A 250 bar/s ramp with 0.05 bar of noise at 1 kHz: slip rises linearly, the wheel locks at the
+  // end. The encoder speeds are the means over the last frame (half a frame late).
+  pipeline::Event e;
+  pipeline::Calibration c;
+  c.brake_gain_n_per_bar = 66.7;
+  Rng rng(3);
+  const double rate_per_s = 0.2;  // slip rate
+  double v_wheel_prev = 10.0;
+  for (int i = 0; i < 400; ++i) {
+    const double t = i * 1e-3;
+    const double slip = std::min(1.0, 0.004 + rate_per_s * t + (t > 0.35 ? 40 * (t - 0.35) : 0));
+    const double v_wheel = 10.0 * (1 - slip);
+    pipeline::Sample smp;
+    smp.t_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
+    smp.v_ref_mps = 10.0;
+    smp.v_wheel_mps = 0.5 * (v_wheel + v_wheel_prev);  // mean over the last frame
+    v_wheel_prev = v_wheel;
+    smp.pressure_bar = 2.0 + 250.0 * t + 0.05 * rng.normal();
+    e.samples.push_back(smp);
+  }
+  gap::ConditionOptions o;
+  o.max_points = 1000;
+  const gap::Run r = gap::condition("synthetic", e, c, o);
+  // Noise from second differences: the 16 N per sample of the ramp is not counted.
+  EXPECT_NEAR(r.noise_n, 66.7 * 0.05, 0.5);
+  // The lock-up (slip jumping 0.04 per sample past 0.05) is cut.
+  EXPECT_LT(r.t_s.back(), 0.352);
+  EXPECT_GT(r.t_s.back(), 0.34);
+  // Aligned: the slip at each stamp is the slip of that moment (not half a frame earlier).
+  for (std::size_t i = 20; i + 20 < r.slip.size(); i += 37)
+    EXPECT_NEAR(r.slip[i], 0.004 + rate_per_s * r.t_s[i], 2e-5) << r.t_s[i];
+  EXPECT_NEAR(r.initial_slip_rate_per_s, rate_per_s, 0.01);
+  EXPECT_NEAR(r.initial_force_n, 66.7 * 2.0, 4.0);
+}
+
 TEST(Gap, WheelInertiaIsFoundFirst) {
   // Only the wheel's real inertia (1 kg m^2) differs from the 4-parameter model.
   sim::Scenario s = scenario("ideal_roller");
@@ -103,6 +139,13 @@ TEST(GapReferee, RollerVsRoadNamesTheTransferEffect) {
   EXPECT_EQ(t.verdict.front(), "roller_friction");
   EXPECT_NEAR(t.estimate, 1.3, 0.25 * 1.3);
   EXPECT_LT(t.gap_after_n, 1.2 * t.noise_n);
+  // Load transfer on the road (dFz/Fz 0.03 per m/s^2 through D): named, its magnitude within 25 %.
+  const sim::Injection lt{"load_transfer", 0.03, gap::Condition::RollerToRoad};
+  const auto l = sim::run_trial(lt, 5, gap::calibrated_options(lt.condition));
+  ASSERT_FALSE(l.verdict.empty());
+  EXPECT_EQ(l.verdict.front(), "load_transfer");
+  EXPECT_NEAR(l.estimate, 0.03, 0.25 * 0.03);
+  EXPECT_LT(l.gap_after_n, 0.02 * l.gap_before_n);
   // Roller and road with the same tyre and no transfer effect: none.
   const auto null = sim::run_trial({"none", 0.0, gap::Condition::RollerToRoad}, 4,
                                    gap::calibrated_options(gap::Condition::RollerToRoad));
