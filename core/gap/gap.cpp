@@ -703,33 +703,47 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(),
               [&](std::size_t a, std::size_t b) { return scores[a].gain > scores[b].gain; });
-    EffectScore& best = scores[order[0]];
-    best.accepted = best.gain >= o.gate_gain && best.delta_bic <= -o.bic_margin;
-    // Every parameter of the effect inside its physical range (a misspecified curve on the
-    // ground was taken for load transfer with the stiffness ratio at its end, 3).
-    const auto bps = effect_params(best.effect);
-    for (std::size_t j = 0; best.accepted && j < bps.size(); ++j) {
-      const double v = best.params[j].second;
-      if (!at_bound(v, bps[j].lo, bps[j].hi)) continue;
-      best.accepted = false;
-      rep.notes.push_back(
-          fmt::format("{} would explain part of the residual only with {} at the "
-                      "end of its physical range ({:.4g}): not accepted",
-                      to_string(best.effect), bps[j].name, v));
+    auto passes = [&](const EffectScore& e) {
+      return e.gain >= o.gate_gain && e.delta_bic <= -o.bic_margin;
+    };
+    // The best candidate past the gates whose parameters all lie inside their physical ranges (a
+    // misspecified curve on the ground was taken for load transfer with the stiffness ratio at
+    // its end, 3); one at the end of a range is noted and the next one is considered.
+    std::size_t pick = order.size();
+    for (std::size_t k = 0; k < order.size() && pick == order.size(); ++k) {
+      EffectScore& e = scores[order[k]];
+      if (!passes(e)) break;  // sorted by gain: the rest do not pass the gain gate either
+      const auto eps = effect_params(e.effect);
+      bool inside = true;
+      for (std::size_t j = 0; j < eps.size() && inside; ++j) {
+        const double v = e.params[j].second;
+        if (!at_bound(v, eps[j].lo, eps[j].hi)) continue;
+        inside = false;
+        rep.notes.push_back(
+            fmt::format("{} would explain part of the residual only with {} at the "
+                        "end of its physical range ({:.4g}): not accepted",
+                        to_string(e.effect), eps[j].name, v));
+      }
+      if (inside) pick = k;
     }
-    if (order.size() > 1) {
-      const EffectScore& second = scores[order[1]];
-      const bool both_pass = second.gain >= o.gate_gain && second.delta_bic <= -o.bic_margin;
-      if (best.accepted && both_pass && best.gain - second.gain < o.separability * best.gain)
-        rep.notes.push_back(fmt::format(fmt::runtime(separability_note), to_string(best.effect),
-                                        to_string(second.effect), best.gain, second.gain));
+    if (pick < order.size()) {
+      EffectScore& best = scores[order[pick]];
+      best.accepted = true;
+      for (std::size_t k = pick + 1; k < order.size(); ++k) {
+        const EffectScore& next = scores[order[k]];
+        if (passes(next) && best.gain - next.gain < o.separability * best.gain)
+          rep.notes.push_back(fmt::format(fmt::runtime(separability_note), to_string(best.effect),
+                                          to_string(next.effect), best.gain, next.gain));
+        break;
+      }
     }
     if (round == 0) rep.effects = scores;
-    if (!best.accepted) break;
+    if (pick == order.size()) break;
+    const EffectScore& best = scores[order[pick]];
     if (round > 0) rep.effects.push_back(best);
     chosen.push_back(best.effect);
     current_heldout = best.heldout_rmse_after_n;
-    current_fit = fits[order[0]];
+    current_fit = fits[order[pick]];
   }
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
@@ -798,14 +812,47 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
   return rep;
 }
 
-Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>& road,
+namespace {
+
+/// The run up to its first sample with slip above max_slip (the apply phase below it).
+Run up_to_slip(const Run& r, double max_slip) {
+  std::size_t n = 0;
+  while (n < r.slip.size() && r.slip[n] <= max_slip) ++n;
+  Run out = r;
+  for (auto* v : {&out.t_s, &out.slip, &out.v_ref_mps, &out.force_n, &out.wheel_accel_mps2,
+                  &out.ref_decel_mps2, &out.pressure_rate_bar_per_s})
+    v->resize(n);
+  return out;
+}
+
+}  // namespace
+
+Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>& road_all,
                          const MfParams& start, const Options& o) {
   if (roller.empty()) throw InputError("bench-vs-bench gap: no usable roller run");
+  // The roller fit says nothing beyond the slips the roller runs reached (a roller test stops
+  // near the peak): the road runs are compared up to that slip.
+  double max_slip = 0;
+  for (const Run& r : roller)
+    for (double k : r.slip) max_slip = std::max(max_slip, k);
+  std::vector<Run> road;
+  std::size_t dropped = 0, total = 0;
+  for (const Run& r : road_all) {
+    Run cut = up_to_slip(r, max_slip);
+    total += r.t_s.size();
+    dropped += r.t_s.size() - cut.t_s.size();
+    if (cut.t_s.size() >= 20) road.push_back(std::move(cut));
+  }
   if (road.size() < 2)
     throw InputError(
         "bench-vs-bench gap needs at least two road runs (each transfer effect is checked on a "
-        "road run it was not fitted to)");
+        "road run it was not fitted to) with 20 samples below the roller runs' largest slip");
   Report rep;
+  if (dropped > 0)
+    rep.notes.push_back(fmt::format(
+        "the road runs are compared up to {:.1f} % slip, the largest the roller runs reached ({} "
+        "of {} road samples beyond it are left out: the roller fit says nothing there)",
+        100 * max_slip, dropped, total));
   rep.noise_n = noise_of(road);
   // The roller's own effects (relaxation, inertia, threshold...) would bend its B, C, D, E: with
   // two or more roller runs they are diagnosed first (model vs measurement, roller gates) and the
