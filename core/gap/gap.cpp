@@ -173,6 +173,36 @@ double interp(const std::vector<double>& t, const std::vector<double>& x, double
 
 }  // namespace
 
+namespace {
+
+/// Least-squares line through the samples of the first window_s of a run.
+struct StartLine {
+  double at_start = 0.0, slope = 0.0;
+  int points = 0;
+};
+StartLine start_line(const std::vector<double>& t_s, const std::vector<double>& x,
+                     double window_s) {
+  double st = 0, sx = 0, stt = 0, stx = 0;
+  StartLine l;
+  for (std::size_t i = 0; i < t_s.size() && t_s[i] - t_s[0] <= window_s; ++i, ++l.points) {
+    const double t = t_s[i] - t_s[0];
+    st += t;
+    sx += x[i];
+    stt += t * t;
+    stx += t * x[i];
+  }
+  const double m = l.points, den = m * stt - st * st;
+  if (den > 0) {
+    l.slope = (m * stx - st * sx) / den;
+    l.at_start = (sx * stt - st * stx) / den;
+  } else if (l.points > 0) {
+    l.at_start = sx / m;
+  }
+  return l;
+}
+
+}  // namespace
+
 /// The initial slip rate is fitted over this much of the run's start.
 constexpr double kInitialWindowS = 0.04;
 /// Past this slip the wheel is taken as locked.
@@ -259,31 +289,12 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   for (double& d : dref) d = -d;
   full.ref_decel_mps2 = dref;
   full.pressure_rate_bar_per_s = derivative(full.t_s, smooth(pressure, o.smooth_half_window));
-  {  // initial slip rate: least squares over the first kInitialWindowS
-    double st = 0, ss = 0, stt = 0, sts = 0, m = 0;
-    for (std::size_t i = 0; i < full.t_s.size() && full.t_s[i] - full.t_s[0] <= kInitialWindowS;
-         ++i, ++m) {
-      const double t = full.t_s[i] - full.t_s[0];
-      st += t;
-      ss += full.slip[i];
-      stt += t * t;
-      sts += t * full.slip[i];
-    }
-    const double den = m * stt - st * st;
-    if (m >= 3 && den > 0) full.initial_slip_rate_per_s = std::max(0.0, (m * sts - st * ss) / den);
-    // initial force: a straight line through the first 20 ms, at the first sample (a 250 bar/s
-    // ramp adds 170 N in 10 ms: a mean would sit half of that too high)
-    double ft = 0, ff = 0, ftt = 0, ftf = 0, mf = 0;
-    for (std::size_t i = 0; i < full.t_s.size() && full.t_s[i] - full.t_s[0] <= 0.02; ++i, ++mf) {
-      const double t = full.t_s[i] - full.t_s[0];
-      ft += t;
-      ff += full.force_n[i];
-      ftt += t * t;
-      ftf += t * full.force_n[i];
-    }
-    const double fden = mf * ftt - ft * ft;
-    full.initial_force_n = fden > 0 ? (ff * ftt - ft * ftf) / fden : ff / mf;
-  }
+  // Start state: the slip rate (a line through the first kInitialWindowS) and the force at the
+  // first sample (a line through the first 20 ms: a 250 bar/s ramp adds 170 N in 10 ms, so a mean
+  // would sit half of that too high).
+  if (const StartLine slip = start_line(full.t_s, full.slip, kInitialWindowS); slip.points >= 3)
+    full.initial_slip_rate_per_s = std::max(0.0, slip.slope);
+  full.initial_force_n = start_line(full.t_s, full.force_n, 0.02).at_start;
   // Decimate uniformly in time. (Uniform in slip progress was tried: it over-weights the runaway
   // after the peak, where slip is measured across only one or two frames, and the null case got
   // worse: 147 N instead of 7 N.)
