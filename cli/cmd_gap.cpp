@@ -118,12 +118,14 @@ void write_report(const std::string& dir, const gap::Report& r, const std::vecto
   std::string rows;
   for (const auto& e : doc["effects"])
     rows += fmt::format(
-        "<tr{}><td>{}</td><td>{}</td><td>{:.1f}</td><td>{:.1f}</td><td>{:.3f}</td><td>{:.1f}</td>"
+        "<tr{}><td>{}</td><td>{}</td><td>{:.1f}</td><td>{:.1f}</td><td>{:.3f}</td><td>{}</td>"
         "<td>{}</td></tr>\n",
         e["accepted"].get<bool>() ? " class=\"ok\"" : "", e["name"].get<std::string>(),
         plot::xml_escape(e["params"].dump()), e["heldout_rmse_before_n"].get<double>(),
         e["heldout_rmse_after_n"].get<double>(), e["gain"].get<double>(),
-        e["delta_bic"].get<double>(), e["accepted"].get<bool>() ? "yes" : "no");
+        e["delta_bic"].is_number() ? fmt::format("{:.1f}", e["delta_bic"].get<double>())
+                                   : std::string("(found on the roller runs)"),
+        e["accepted"].get<bool>() ? "yes" : "no");
   std::string where;
   for (const auto& w : r.where)
     where += fmt::format("<tr><td>{}</td><td>{:.1f}</td><td>{:.1f} %</td></tr>\n",
@@ -280,8 +282,10 @@ void add_gap_command(CLI::App& app) {
     for (const auto& e : rep.effects) {
       std::string ps;
       for (const auto& [k, v] : e.params) ps += fmt::format("{} {:.4g} ", k, v);
-      std::cout << fmt::format("  {:<18} {:<32} gain {:>6.3f}  dBIC {:>8.1f}  {}\n",
-                               gap::to_string(e.effect), ps, e.gain, e.delta_bic,
+      const std::string bic = std::isfinite(e.delta_bic) ? fmt::format("{:>8.1f}", e.delta_bic)
+                                                         : std::string("     n/a");
+      std::cout << fmt::format("  {:<18} {:<32} gain {:>6.3f}  dBIC {}  {}\n",
+                               gap::to_string(e.effect), ps, e.gain, bic,
                                e.accepted ? "accepted" : "");
     }
     for (const auto& n : rep.notes) std::cout << "note: " << n << "\n";

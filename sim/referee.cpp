@@ -17,11 +17,10 @@ struct Range {
   bool either_sign = false;
 };
 const std::vector<Range>& ranges(gap::Condition c) {
-  static const std::vector<Range> roller = {{"relaxation_length", 0.05, 0.4},
-                                            {"wheel_inertia", 0.5, 3.0},
-                                            {"brake_threshold", 1.0, 5.0},
-                                            {"time_offset", 0.01, 0.05},
-                                            {"slip_offset", 0.002, 0.01, true}};
+  static const std::vector<Range> roller = {
+      {"relaxation_length", 0.05, 0.4},   {"wheel_inertia", 0.5, 3.0},
+      {"brake_threshold", 1.0, 5.0},      {"time_offset", 0.01, 0.05},
+      {"slip_offset", 0.002, 0.01, true}, {"cradle_cap", 2400.0, 3550.0}};
   // On flat ground (40 km/h, 0.2-0.6 s stops) the same five, and load transfer and speed
   // friction (on one bench both reshape the curve mostly as a function of slip; what B, C, D, E
   // cannot absorb is what the diagnosis sees).
@@ -30,8 +29,11 @@ const std::vector<Range>& ranges(gap::Condition c) {
       {"brake_threshold", 1.0, 5.0},      {"time_offset", 0.005, 0.03},
       {"slip_offset", 0.002, 0.01, true}, {"load_transfer", 0.015, 0.05},
       {"speed_friction", 0.5, 2.0}};
-  static const std::vector<Range> transfer = {
-      {"roller_friction", 1.1, 1.6}, {"load_transfer", 0.015, 0.05}, {"speed_friction", 0.3, 2.0}};
+  // cradle_cap: the cap in N, 60-90 % of the null tyre's 3 976 N peak (on the roller).
+  static const std::vector<Range> transfer = {{"roller_friction", 1.1, 1.6},
+                                              {"load_transfer", 0.015, 0.05},
+                                              {"speed_friction", 0.3, 2.0},
+                                              {"cradle_cap", 2400.0, 3550.0}};
   switch (c) {
     case gap::Condition::Roller:
       return roller;
@@ -55,7 +57,8 @@ double d_ln_d_per_ln_fz(const Scenario& s) {
 }
 
 bool is_transfer_roller_effect(const Injection& inj) {
-  return inj.condition == gap::Condition::RollerToRoad && inj.effect == "roller_friction";
+  return inj.condition == gap::Condition::RollerToRoad &&
+         (inj.effect == "roller_friction" || inj.effect == "cradle_cap");
 }
 
 }  // namespace
@@ -111,6 +114,7 @@ Scenario inject(Scenario s, const Injection& inj) {
   }
   if (inj.effect == "speed_friction") s.effects.speed_friction = inj.magnitude;
   if (inj.effect == "roller_friction") s.effects.roller_friction = 1.0 / inj.magnitude;
+  if (inj.effect == "cradle_cap") s.effects.cradle_cap_ratio = inj.magnitude / s.wheel_load_n;
   if (inj.effect == "misspecified") s.tyre.family = TyreMf61::Family::Burckhardt;
   return s;
 }

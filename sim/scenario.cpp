@@ -21,6 +21,7 @@ std::vector<std::string> Effects::active() const {
   if (encoder_ppr > 0) a.push_back("quantisation");
   if (tester_force_lag_s > 0) a.push_back("tester_force_lag");
   if (wheel_radius_error_ratio != 0) a.push_back("wheel_radius_error");
+  if (cradle_cap_ratio > 0) a.push_back("cradle_cap");
   return a;
 }
 
@@ -99,11 +100,11 @@ Scenario parse_scenario(std::string_view text, const std::string& source) {
   }
   if (const auto* t = rd.table(root, "", "effects")) {
     const std::string p = "effects.";
-    rd.check_keys(
-        *t, p,
-        {"relaxation_length_m", "wheel_inertia", "brake_threshold_bar", "speed_friction",
-         "load_transfer", "roller_friction", "slip_offset", "pressure_lag_s", "pressure_noise_bar",
-         "time_offset_s", "encoder_ppr", "tester_force_lag_s", "wheel_radius_error_ratio"});
+    rd.check_keys(*t, p,
+                  {"relaxation_length_m", "wheel_inertia", "brake_threshold_bar", "speed_friction",
+                   "load_transfer", "roller_friction", "slip_offset", "pressure_lag_s",
+                   "pressure_noise_bar", "time_offset_s", "encoder_ppr", "tester_force_lag_s",
+                   "wheel_radius_error_ratio", "cradle_cap_ratio"});
     auto& e = s.effects;
     e.relaxation_length_m = rd.number(*t, p, "relaxation_length_m", e.relaxation_length_m, 0, 2);
     e.wheel_inertia = rd.boolean(*t, p, "wheel_inertia", e.wheel_inertia);
@@ -119,6 +120,7 @@ Scenario parse_scenario(std::string_view text, const std::string& source) {
     e.tester_force_lag_s = rd.number(*t, p, "tester_force_lag_s", e.tester_force_lag_s, 0, 1);
     e.wheel_radius_error_ratio =
         rd.number(*t, p, "wheel_radius_error_ratio", e.wheel_radius_error_ratio, -0.1, 0.1);
+    e.cradle_cap_ratio = rd.number(*t, p, "cradle_cap_ratio", e.cradle_cap_ratio, 0, 2);
   }
   if (const auto* t = rd.table(root, "", "tyre")) {
     const std::string p = "tyre.";

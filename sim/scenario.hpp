@@ -28,6 +28,9 @@ struct Effects {
   /// The wheel encoder is calibrated with a rolling radius (1 + this) x the true one: the
   /// measured slip is offset by about minus this (a slip offset from calibration).
   double wheel_radius_error_ratio = 0.0;
+  /// Roller only: the cradle caps the braking force at this x Fz (sin beta of the wheel on the
+  /// rear roller; 0 = off).
+  double cradle_cap_ratio = 0.0;
   std::vector<std::string> active() const;
 };
 

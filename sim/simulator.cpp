@@ -131,11 +131,17 @@ SimResult simulate(const Scenario& s) {
     const double a = e.relaxation_length_m > 0 ? dt * v_ref / e.relaxation_length_m : INFINITY;
     const double w = std::isinf(a) ? 1.0 : a / (1.0 + a);
     const double kappa_new = std::isinf(a) ? kappa : (kappa_t + a * kappa) / (1.0 + a);
-    const double force = braking_force(s.tyre, tyre_state, kappa_new);
+    // Two-roller cradle: past Fz sin(beta) the unrestrained wheel climbs the rear roller and the
+    // braking force stays at that cap, whatever the friction (physics.md section 3).
+    const double cap_n =
+        roller && e.cradle_cap_ratio > 0 ? e.cradle_cap_ratio * s.wheel_load_n : INFINITY;
+    const double tyre_force = braking_force(s.tyre, tyre_state, kappa_new);
+    const double force = std::min(tyre_force, cap_n);
     constexpr double h = 1e-6;
-    const double dF_dk = (braking_force(s.tyre, tyre_state, kappa_new + h) -
-                          braking_force(s.tyre, tyre_state, kappa_new - h)) /
-                         (2 * h);
+    const double dF_dk = tyre_force >= cap_n ? 0.0
+                                             : (braking_force(s.tyre, tyre_state, kappa_new + h) -
+                                                braking_force(s.tyre, tyre_state, kappa_new - h)) /
+                                                   (2 * h);
     const double dF_domega = v_ref > 0.05 ? dF_dk * w * (-rw / v_ref) : 0.0;
     const double tb = s.brake_gain_nm_per_bar * std::max(0.0, p_line - e.brake_threshold_bar);
     // Wheel: I w' = F R - Tb, linearly implicit in w (stable for stiff tyres), locked at 0.

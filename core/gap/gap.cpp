@@ -41,6 +41,8 @@ const char* to_string(Effect e) {
       return "speed_friction";
     case Effect::RollerFriction:
       return "roller_friction";
+    case Effect::CradleCap:
+      return "cradle_cap";
   }
   return "?";
 }
@@ -122,6 +124,8 @@ EffectParam effect_param(Effect e) {
       return {"lambda_mu_v", 0.0, 20.0, 0.1};
     case Effect::RollerFriction:
       return {"mu_ratio", 0.3, 2.0, 1.0};
+    case Effect::CradleCap:
+      return {"cap_n", 100.0, 1e5, 0.0};  // start and fit range: from the runs' peak force
   }
   return {"?", 0, 0, 0};
 }
@@ -207,8 +211,9 @@ StartLine start_line(const std::vector<double>& t_s, const std::vector<double>& 
 constexpr double kInitialWindowS = 0.04;
 /// Past this slip the wheel is taken as locked.
 constexpr double kLockSlip = 0.9;
-/// A lock-up runaway starts past the linear region: jumps below this slip are noise.
-constexpr double kRunawayMinSlip = 0.05;
+/// A lock-up runaway starts past the linear region: jumps below this slip are noise. (2 %: a
+/// wheel capped by the cradle below its peak runs away from there.)
+constexpr double kRunawayMinSlip = 0.02;
 
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o) {
@@ -242,6 +247,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       const bool runaway = o.runaway_slip_per_sample > 0 && s0 > kRunawayMinSlip &&
                            s1 - s0 > o.runaway_slip_per_sample;
       if (runaway || s1 >= kLockSlip) {
+        full.runaway = runaway;
+        full.runaway_force_n = full.force_n[i - 1];
         full.t_s.resize(i);
         full.v_ref_mps.resize(i);
         v_wheel.resize(i);
@@ -310,6 +317,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.noise_n = full.noise_n;
   r.initial_slip_rate_per_s = full.initial_slip_rate_per_s;
   r.initial_force_n = full.initial_force_n;
+  r.runaway = full.runaway;
+  r.runaway_force_n = full.runaway_force_n;
   for (std::size_t i : idx) {
     r.t_s.push_back(full.t_s[i]);
     r.slip.push_back(full.slip[i]);
@@ -365,7 +374,7 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   // The force-side effects first; the slip-side ones (relaxation, slip offset, time offset) are
   // then applied in that order whatever the order of `effects` (they commute but for the initial
   // state of the relaxation, which needs the force side).
-  double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0;
+  double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0, cap_n = INFINITY;
   bool relaxation = false, threshold = false;
   std::size_t next = 4;  // index of the current effect's first parameter in p
   for (const Effect effect : effects) {
@@ -411,6 +420,9 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
           b_scale[i] /= mu;
         }
         break;
+      case Effect::CradleCap:  // the cradle caps the tyre's force (before the wheel's terms)
+        cap_n = q;
+        break;
       case Effect::RollerFriction:  // the other surface's friction: D scales, B C D does not
         for (std::size_t i = 0; i < n; ++i) {
           d_scale[i] *= q;
@@ -451,7 +463,7 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
     m.D *= d_scale[i];
     m.B *= b_scale[i];
     m.E = std::min(m.E + e_add[i], 1.0);
-    f[i] = mf_force_n(m, slip[i]) + add[i];
+    f[i] = std::min(mf_force_n(m, slip[i]), cap_n) + add[i];
     // Brake threshold: gain p = Tb/R + gain p0 while the brake bites; below p0 the pads give no
     // torque and the measured pressure can be anything up to p0: gain min(p, p0) is added.
     if (threshold) f[i] += std::min(threshold_n, r.force_n[i]);
@@ -527,6 +539,13 @@ Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& eff
       lo(i) = ep.lo;
       hi(i) = ep.hi;
       x0(i++) = ep.start;
+    }
+  for (std::size_t k = 0, at = 4; k < effects.size(); at += effect_params(effects[k++]).size())
+    if (effects[k] == Effect::CradleCap) {  // the cap starts at the largest force measured
+      const auto j = static_cast<Eigen::Index>(at);
+      lo(j) = 0.3 * peak;
+      hi(j) = 2.0 * peak;
+      x0(j) = peak;
     }
   GapProblem problem(runs, effects);
   fit::LmOptions lm;
@@ -787,11 +806,73 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
 
 }  // namespace
 
-Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Options& o) {
-  if (runs.size() < 2)
+namespace {
+
+/// The run up to its first sample whose slip (or force) is above the limit.
+Run up_to(const Run& r, const std::vector<double>& x, double limit) {
+  std::size_t n = 0;
+  while (n < x.size() && x[n] <= limit) ++n;
+  Run out = r;
+  for (auto* v : {&out.t_s, &out.slip, &out.v_ref_mps, &out.force_n, &out.wheel_accel_mps2,
+                  &out.ref_decel_mps2, &out.pressure_rate_bar_per_s})
+    v->resize(n);
+  return out;
+}
+
+/// Least-squares slope of force over slip for the samples with force in [lo, hi].
+double force_slope(const Run& r, double lo_n, double hi_n) {
+  double sk = 0, sf = 0, skk = 0, skf = 0, m = 0;
+  for (std::size_t i = 0; i < r.slip.size(); ++i) {
+    if (r.force_n[i] < lo_n || r.force_n[i] > hi_n) continue;
+    sk += r.slip[i];
+    sf += r.force_n[i];
+    skk += r.slip[i] * r.slip[i];
+    skf += r.slip[i] * r.force_n[i];
+    ++m;
+  }
+  const double den = m * skk - sk * sk;
+  return m >= 5 && den > 0 ? (m * skf - sk * sf) / den : NAN;
+}
+
+}  // namespace
+
+std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs) {
+  if (runs.size() < 2) return std::nullopt;
+  double lo = INFINITY, hi = 0, sum = 0, ratio = INFINITY;
+  for (const Run& r : runs) {
+    if (!r.runaway) return std::nullopt;
+    const double f = r.runaway_force_n;
+    lo = std::min(lo, f);
+    hi = std::max(hi, f);
+    sum += f;
+    const double initial = force_slope(r, 0.05 * f, 0.3 * f);
+    const double end = force_slope(r, 0.85 * f, 1.0 * f);
+    if (!(initial > 0) || !std::isfinite(end)) return std::nullopt;
+    ratio = std::min(ratio, end / initial);
+  }
+  CapEvidence e;
+  e.cap_n = sum / static_cast<double>(runs.size());
+  e.spread = (hi - lo) / e.cap_n;
+  e.end_slope_ratio = ratio;
+  if (e.spread > 0.03 || e.end_slope_ratio < 0.3) return std::nullopt;
+  return e;
+}
+
+Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Options& o) {
+  if (runs_in.size() < 2)
     throw InputError(
         "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
         "to)");
+  // A force cap (a two-roller cradle): the runs end in a runaway at the cap; the samples from 98 %
+  // of the cap on are that runaway, not the tyre, and are left out.
+  const auto cap = cradle_cap_evidence(runs_in);
+  std::vector<Run> runs;
+  for (const Run& r : runs_in) {
+    Run cut = cap ? up_to(r, r.force_n, 0.98 * cap->cap_n) : r;
+    if (cut.t_s.size() >= 20) runs.push_back(std::move(cut));
+  }
+  if (runs.size() < 2)
+    throw InputError("gap diagnosis: fewer than two runs with 20 samples below the force cap");
   Report rep;
   rep.noise_n = noise_of(runs);
   rep.before = fit_runs(pointers(runs), {}, start);
@@ -813,6 +894,34 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
   select_effects(rep, runs, kAllEffects, fit, o,
                  "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at "
                  "other speeds or ramp rates would");
+  if (cap) {
+    // Found from how the runs end, not fitted: before, the baseline on the whole runs (the
+    // runaway at the cap included); after, what the selection left on the runs below the cap.
+    rep.cap_n = cap->cap_n;
+    EffectScore c;
+    c.effect = Effect::CradleCap;
+    c.params = {{"cap_n", cap->cap_n}};
+    c.heldout_rmse_before_n = heldout(runs_in, {}, fit);
+    c.heldout_rmse_after_n = rep.gap_after_rmse_n;
+    c.gain = 1.0 - c.heldout_rmse_after_n / std::max(c.heldout_rmse_before_n, 1e-12);
+    c.delta_bic = NAN;
+    c.accepted = true;
+    rep.effects.insert(rep.effects.begin(), c);
+    if (rep.verdict == std::vector<std::string>{"none"}) rep.verdict.clear();
+    rep.verdict.insert(rep.verdict.begin(), to_string(Effect::CradleCap));
+    rep.gap_before_rmse_n = c.heldout_rmse_before_n;
+    rep.notes.push_back(fmt::format(
+        "every run ran away at {:.0f} N (spread {:.1f} %) while its force was still rising with "
+        "slip ({:.0f} % of the initial slope): the force was capped before the tyre's peak (a "
+        "two-roller cradle caps it at Fz sin beta); the samples from 98 % of the cap on (the "
+        "runaway) are left out, and B, C, D, E describe the curve only up to that force",
+        cap->cap_n, 100 * cap->spread, 100 * cap->end_slope_ratio));
+  } else if (const auto it = std::find(rep.accepted.begin(), rep.accepted.end(), Effect::CradleCap);
+             it != rep.accepted.end()) {
+    std::size_t at = 4;
+    for (auto e = rep.accepted.begin(); e != it; ++e) at += effect_params(*e).size();
+    rep.cap_n = rep.after.params[at];
+  }
   if (std::find(rep.accepted.begin(), rep.accepted.end(), Effect::LoadTransfer) !=
       rep.accepted.end())
     rep.notes.push_back(
@@ -823,33 +932,38 @@ Report diagnose(const std::vector<Run>& runs, const MfParams& start, const Optio
   return rep;
 }
 
-namespace {
-
-/// The run up to its first sample with slip above max_slip (the apply phase below it).
-Run up_to_slip(const Run& r, double max_slip) {
-  std::size_t n = 0;
-  while (n < r.slip.size() && r.slip[n] <= max_slip) ++n;
-  Run out = r;
-  for (auto* v : {&out.t_s, &out.slip, &out.v_ref_mps, &out.force_n, &out.wheel_accel_mps2,
-                  &out.ref_decel_mps2, &out.pressure_rate_bar_per_s})
-    v->resize(n);
-  return out;
-}
-
-}  // namespace
-
 Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>& road_all,
                          const MfParams& start, const Options& o) {
   if (roller.empty()) throw InputError("bench-vs-bench gap: no usable roller run");
-  // The roller fit says nothing beyond the slips the roller runs reached (a roller test stops
-  // near the peak): the road runs are compared up to that slip.
+  Report rep;
+  // The roller's own effects (relaxation, inertia, threshold, a cradle cap...) would bend its B,
+  // C, D, E: with two or more roller runs they are diagnosed first (model vs measurement, roller
+  // gates) and the corrected parameters are what the roller says about the tyre.
+  Fit roller_fit = fit_runs(pointers(roller), {}, start);
+  double cap_n = NAN;
+  if (roller.size() >= 2) {
+    const Report own = diagnose(roller, start, calibrated_options(Condition::Roller, o));
+    roller_fit = own.after;
+    cap_n = own.cap_n;
+    std::vector<std::string> names;
+    for (const auto& v : own.verdict)
+      if (v != "none" && v != "unexplained") names.push_back(v);
+    if (!names.empty())
+      rep.notes.push_back(fmt::format(
+          "the roller runs were corrected for their own {} before their B, C, D, E were carried to "
+          "the road",
+          fmt::join(names, ", ")));
+  }
+  const bool capped = std::isfinite(cap_n);
+  // The roller fit says nothing beyond what the roller runs reached (a roller test stops near
+  // the peak, or at the cap): the road runs are compared up to that slip (or force).
   double max_slip = 0;
   for (const Run& r : roller)
     for (double k : r.slip) max_slip = std::max(max_slip, k);
   std::vector<Run> road;
   std::size_t dropped = 0, total = 0;
   for (const Run& r : road_all) {
-    Run cut = up_to_slip(r, max_slip);
+    Run cut = capped ? up_to(r, r.force_n, cap_n) : up_to(r, r.slip, max_slip);
     total += r.t_s.size();
     dropped += r.t_s.size() - cut.t_s.size();
     if (cut.t_s.size() >= 20) road.push_back(std::move(cut));
@@ -857,29 +971,18 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
   if (road.size() < 2)
     throw InputError(
         "bench-vs-bench gap needs at least two road runs (each transfer effect is checked on a "
-        "road run it was not fitted to) with 20 samples below the roller runs' largest slip");
-  Report rep;
+        "road run it was not fitted to) with 20 samples within the roller runs' reach");
   if (dropped > 0)
-    rep.notes.push_back(fmt::format(
-        "the road runs are compared up to {:.1f} % slip, the largest the roller runs reached ({} "
-        "of {} road samples beyond it are left out: the roller fit says nothing there)",
-        100 * max_slip, dropped, total));
+    rep.notes.push_back(
+        capped ? fmt::format("the road runs are compared up to the roller's cap, {:.0f} N ({} of "
+                             "{} road samples above it are left out: the roller says nothing "
+                             "there)",
+                             cap_n, dropped, total)
+               : fmt::format("the road runs are compared up to {:.1f} % slip, the largest the "
+                             "roller runs reached ({} of {} road samples beyond it are left out: "
+                             "the roller fit says nothing there)",
+                             100 * max_slip, dropped, total));
   rep.noise_n = noise_of(road);
-  // The roller's own effects (relaxation, inertia, threshold...) would bend its B, C, D, E: with
-  // two or more roller runs they are diagnosed first (model vs measurement, roller gates) and the
-  // corrected parameters are what the roller says about the tyre.
-  Fit roller_fit = fit_runs(pointers(roller), {}, start);
-  if (roller.size() >= 2) {
-    const Report own = diagnose(roller, start, calibrated_options(Condition::Roller, o));
-    roller_fit = own.after;
-    std::vector<std::string> names;
-    for (Effect e : own.accepted) names.push_back(to_string(e));
-    if (!names.empty())
-      rep.notes.push_back(fmt::format(
-          "the roller runs were corrected for their own {} before their B, C, D, E were carried to "
-          "the road",
-          fmt::join(names, ", ")));
-  }
   const MfParams base{
       roller_fit.params[0], roller_fit.params[1], roller_fit.params[2], roller_fit.params[3], 0, 0};
   const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
@@ -891,6 +994,32 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
   rep.where = where_rows(road, rep.before.params);
   select_effects(rep, road, kTransferEffects, fit, o,
                  "the road runs cannot separate {} from {} (held-out gains {:.3f} and {:.3f})");
+  if (capped) {
+    // The cradle capped the roller below the tyre's peak: the roller curve is known up to the cap
+    // only, and the road above it is no gap of the tyre's. Before: the whole road runs against
+    // the roller curve; after: the road up to the cap (where the rest was ranked).
+    rep.cap_n = cap_n;
+    std::vector<Run> whole;
+    for (const Run& r : road_all)
+      if (r.t_s.size() >= 20) whole.push_back(r);
+    EffectScore c;
+    c.effect = Effect::CradleCap;
+    c.params = {{"cap_n", cap_n}};
+    c.heldout_rmse_before_n = heldout(whole, {}, fit);
+    c.heldout_rmse_after_n = rep.gap_before_rmse_n;
+    c.gain = 1.0 - c.heldout_rmse_after_n / std::max(c.heldout_rmse_before_n, 1e-12);
+    c.delta_bic = NAN;  // found on the roller runs, not fitted to the road
+    c.accepted = true;
+    rep.effects.insert(rep.effects.begin(), c);
+    if (rep.verdict == std::vector<std::string>{"none"}) rep.verdict.clear();
+    rep.verdict.insert(rep.verdict.begin(), to_string(Effect::CradleCap));
+    rep.gap_before_rmse_n = c.heldout_rmse_before_n;
+    rep.notes.push_back(fmt::format(
+        "the cradle capped the roller at {:.0f} N, below the tyre's peak (Fz sin beta): the roller "
+        "shows the tyre only up to that force and the road above it is not a gap of the tyre's "
+        "({:.1f} N held out on the whole road runs, {:.1f} N up to the cap)",
+        cap_n, c.heldout_rmse_before_n, c.heldout_rmse_after_n));
+  }
   return rep;
 }
 

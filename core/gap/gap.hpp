@@ -5,6 +5,8 @@
 // fitted jointly with B, C, D, E over all runs; candidates are ranked by leave-one-run-out error
 // and accepted only past a gain gate and a BIC margin.
 #include <array>
+#include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,11 +27,14 @@ enum class Effect {
   /// Bench vs bench only: load transfer against the roller's held curve, where its effect on the
   /// curve's shape (E) is identifiable too (with B, C, D, E free, E absorbs it). Named
   /// "load_transfer" like LoadTransfer.
-  LoadTransferShape
+  LoadTransferShape,
+  /// Bench vs bench only, found on the roller runs (not fitted): the two-roller cradle capped the
+  /// braking force (Fz sin beta), so the roller never showed the tyre above cap_n.
+  CradleCap
 };
-inline constexpr std::array<Effect, 7> kAllEffects = {
-    Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia, Effect::BrakeThreshold,
-    Effect::SlipOffset,       Effect::LoadTransfer, Effect::SpeedFriction};
+inline constexpr std::array<Effect, 8> kAllEffects = {
+    Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia,  Effect::BrakeThreshold,
+    Effect::SlipOffset,       Effect::LoadTransfer, Effect::SpeedFriction, Effect::CradleCap};
 /// The transfer effects of bench-vs-bench mode (roller fit -> road runs).
 inline constexpr std::array<Effect, 6> kTransferEffects = {
     Effect::RollerFriction,   Effect::LoadTransferShape, Effect::SpeedFriction,
@@ -70,6 +75,9 @@ struct Run {
   /// Force at the first sample (a line through the first 20 ms): sets the relaxation's initial
   /// transient slip.
   double initial_force_n = 0.0;
+  /// The run was cut at a lock-up runaway; the force at its last kept sample.
+  bool runaway = false;
+  double runaway_force_n = 0.0;
 };
 
 struct ConditionOptions {
@@ -137,7 +145,20 @@ struct Report {
   double noise_n = 0.0;
   Fit before, after;
   std::vector<std::string> notes;
+  /// A force cap found on the runs (roller cradle): from the runaway at one force, or the fitted
+  /// cradle_cap effect; NaN when none.
+  double cap_n = NAN;
 };
+
+/// A force cap on the roller (the cradle's Fz sin beta): every run ran away at one force (within
+/// 3 %) while its force was still rising with slip (the slope over its last 15 % of force at
+/// least 0.3x the initial slope; a tyre runs away at its peak, where the slope is zero).
+struct CapEvidence {
+  double cap_n = 0.0;            ///< mean runaway force
+  double spread = 0.0;           ///< (max - min) / mean of the runaway forces
+  double end_slope_ratio = 0.0;  ///< smallest end / initial slope over the runs
+};
+std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs);
 
 /// The gates calibrated on null data of the condition by bench/gap_referee --calibrate (the
 /// figures are in docs/gap.md); the other options as in base.

@@ -212,6 +212,29 @@ class Gap(unittest.TestCase):
         self.assertIn("--roller and --road", r.stderr)
         self.assertIn("ground_2p2bar_150barps", r.stderr)
 
+    def test_a_cradle_cap_on_simulated_roller_runs_is_named_with_its_force(self):
+        # Roller runs simulated with the cradle capping the force at 3 000 N (wheel 1 kg m^2),
+        # against the shipped road runs: the verdict starts with cradle_cap and says the cap.
+        with tempfile.TemporaryDirectory() as d:
+            scen = os.path.join(d, "capped.toml")
+            with open(scen, "w") as f:
+                f.write('[scenario]\nbench = "roller"\nseed = 5\n'
+                        '[effects]\ncradle_cap_ratio = 0.789\npressure_noise_bar = 0.05\n')
+            roller = []
+            for ramp in ("slow", "medium", "fast"):
+                out = os.path.join(d, f"capped_{ramp}.log")
+                r = run("simulate", scen, "--ramp", ramp, "--out", out)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                roller.append(out)
+            r = run("gap", "--json", "--report", os.path.join(d, "rep"), *roller)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            doc = json.loads(r.stdout)
+            self.assertEqual(doc["verdict"][0], "cradle_cap", doc["notes"])
+            cap = next(e for e in doc["effects"] if e["name"] == "cradle_cap")
+            self.assertAlmostEqual(cap["params"]["cap_n"], 0.789 * 3800, delta=0.05 * 3000)
+            with open(os.path.join(d, "rep", "index.html")) as f:
+                self.assertIn("cradle_cap", f.read())
+
     def test_roller_vs_road_ranks_the_transfer_effects(self):
         roller = sorted(glob.glob(os.path.join(REC, "roller_2p2bar_*.log")))
         road = sorted(glob.glob(os.path.join(REC, "ground_2p2bar_*.log")))

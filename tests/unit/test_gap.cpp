@@ -110,6 +110,30 @@ TEST(Gap, BrakeThresholdIsFoundWithItsMagnitude) {
   EXPECT_LT(r.gap_after_rmse_n, 1.2 * r.noise_n);
 }
 
+TEST(Gap, ACradleCapIsFoundFromTheRunawayOrFittedWithTheWheelInertia) {
+  // A light wheel runs away within milliseconds of the cap: the cap leaves no residual and is
+  // found from how the runs end (one force, still rising with slip). A real wheel (1 kg m^2) runs
+  // away gradually: the cap is fitted, jointly with the wheel's inertia.
+  for (const double inertia_kgm2 : {0.005, 1.0}) {
+    sim::Scenario s = sim::referee_null(can::BenchKind::Roller);
+    s.wheel_inertia_kgm2 = inertia_kgm2;
+    s.effects.cradle_cap_ratio = 3000.0 / s.wheel_load_n;
+    const auto rs = sim::simulate_runs(s, 21);
+    ASSERT_GE(rs.size(), 2u);
+    EXPECT_EQ(gap::cradle_cap_evidence(rs).has_value(), inertia_kgm2 < 0.1) << inertia_kgm2;
+    const gap::Report r =
+        gap::diagnose(rs, sim::pooled_start(rs), gap::calibrated_options(gap::Condition::Roller));
+    print(r);
+    ASSERT_FALSE(r.verdict.empty());
+    EXPECT_EQ(r.verdict.front(), "cradle_cap") << inertia_kgm2;
+    EXPECT_NEAR(r.cap_n, 3000.0, 0.05 * 3000.0) << inertia_kgm2;
+    EXPECT_LT(r.gap_after_rmse_n, 1.2 * r.noise_n) << inertia_kgm2;
+  }
+  // Without the cap the runs run away at the tyre's peak: no cap evidence.
+  const auto free_runs = sim::simulate_runs(sim::referee_null(can::BenchKind::Roller), 21);
+  EXPECT_FALSE(gap::cradle_cap_evidence(free_runs).has_value());
+}
+
 // A small subset of the blinded-injection referee (bench/gap_referee runs >= 200 trials).
 TEST(GapReferee, StrongInjectionsAreNamedWithTheirMagnitude) {
   using gap::Condition;
@@ -143,6 +167,16 @@ TEST(GapReferee, RollerVsRoadNamesTheTransferEffect) {
     EXPECT_LT(t.gap_after_n, 0.02 * t.gap_before_n) << inj.effect;
     EXPECT_LT(t.gap_after_n, 1.5 * t.noise_n) << inj.effect;
   }
+  // A cradle cap on the roller (3 000 N, below the tyre's 3 976 N peak): every roller run runs
+  // away at the cap while its force still rises with slip. The verdict names it, with the cap,
+  // and the road up to the cap is within the noise of the roller curve.
+  const sim::Injection cap{"cradle_cap", 3000.0, gap::Condition::RollerToRoad};
+  const auto c = sim::run_trial(cap, 5, gap::calibrated_options(cap.condition));
+  ASSERT_FALSE(c.verdict.empty());
+  EXPECT_EQ(c.verdict.front(), "cradle_cap");
+  EXPECT_NEAR(c.estimate, 3000.0, 0.02 * 3000.0);
+  EXPECT_LT(c.gap_after_n, 1.5 * c.noise_n);
+  EXPECT_LT(c.gap_after_n, c.gap_before_n);
   // Roller and road with the same tyre and no transfer effect: none.
   const auto null = sim::run_trial({"none", 0.0, gap::Condition::RollerToRoad}, 4,
                                    gap::calibrated_options(gap::Condition::RollerToRoad));
