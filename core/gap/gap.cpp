@@ -700,9 +700,8 @@ MfParams neutral_start(const std::vector<Run>& runs) {
 
 /// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,
 /// gap_before_rmse_n, noise_n); fills effects, accepted, after, gap_after_rmse_n, verdict, notes.
-template <std::size_t N>
 void select_effects(Report& rep, const std::vector<Run>& runs,
-                    const std::array<Effect, N>& candidates, const Fitter& fit, const Options& o,
+                    const std::vector<Effect>& candidates, const Fitter& fit, const Options& o,
                     const char* separability_note) {
   const std::vector<const Run*> all = pointers(runs);
   std::vector<Effect> chosen;
@@ -838,6 +837,8 @@ double force_slope(const Run& r, double lo_n, double hi_n) {
 
 std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs) {
   if (runs.size() < 2) return std::nullopt;
+  for (const Run& r : runs)
+    if (r.bench != can::BenchKind::Roller) return std::nullopt;  // a cradle is a roller's
   double lo = INFINITY, hi = 0, sum = 0, ratio = INFINITY;
   for (const Run& r : runs) {
     if (!r.runaway) return std::nullopt;
@@ -891,7 +892,12 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   rep.gap_before_rmse_n = heldout(runs, {}, fit);
   rep.where = where_rows(runs, rep.before.params);
 
-  select_effects(rep, runs, kAllEffects, fit, o,
+  // A cradle cap exists on a roller only.
+  std::vector<Effect> candidates;
+  for (Effect e : kAllEffects)
+    if (e != Effect::CradleCap || runs.front().bench == can::BenchKind::Roller)
+      candidates.push_back(e);
+  select_effects(rep, runs, candidates, fit, o,
                  "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at "
                  "other speeds or ramp rates would");
   if (cap) {
@@ -992,7 +998,7 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
   rep.before.stderr_.assign(roller_fit.stderr_.begin(), roller_fit.stderr_.begin() + 4);
   rep.gap_before_rmse_n = heldout(road, {}, fit);
   rep.where = where_rows(road, rep.before.params);
-  select_effects(rep, road, kTransferEffects, fit, o,
+  select_effects(rep, road, {kTransferEffects.begin(), kTransferEffects.end()}, fit, o,
                  "the road runs cannot separate {} from {} (held-out gains {:.3f} and {:.3f})");
   if (capped) {
     // The cradle capped the roller below the tyre's peak: the roller curve is known up to the cap
