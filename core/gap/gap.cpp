@@ -859,6 +859,28 @@ std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs) {
   return e;
 }
 
+namespace {
+
+/// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole
+/// runs' (gap_whole_n), after the gap below the cap (rep's baseline gap so far).
+void put_cap_first(Report& rep, double cap_n, double gap_whole_n) {
+  rep.cap_n = cap_n;
+  EffectScore c;
+  c.effect = Effect::CradleCap;
+  c.params = {{"cap_n", cap_n}};
+  c.heldout_rmse_before_n = gap_whole_n;
+  c.heldout_rmse_after_n = rep.gap_before_rmse_n;
+  c.gain = 1.0 - c.heldout_rmse_after_n / std::max(c.heldout_rmse_before_n, 1e-12);
+  c.delta_bic = NAN;  // not a fitted model
+  c.accepted = true;
+  rep.effects.insert(rep.effects.begin(), c);
+  if (rep.verdict == std::vector<std::string>{"none"}) rep.verdict.clear();
+  rep.verdict.insert(rep.verdict.begin(), to_string(Effect::CradleCap));
+  rep.gap_before_rmse_n = gap_whole_n;
+}
+
+}  // namespace
+
 Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Options& o) {
   if (runs_in.size() < 2)
     throw InputError(
@@ -902,20 +924,8 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
                  "other speeds or ramp rates would");
   if (cap) {
     // Found from how the runs end, not fitted: before, the baseline on the whole runs (the
-    // runaway at the cap included); after, what the selection left on the runs below the cap.
-    rep.cap_n = cap->cap_n;
-    EffectScore c;
-    c.effect = Effect::CradleCap;
-    c.params = {{"cap_n", cap->cap_n}};
-    c.heldout_rmse_before_n = heldout(runs_in, {}, fit);
-    c.heldout_rmse_after_n = rep.gap_after_rmse_n;
-    c.gain = 1.0 - c.heldout_rmse_after_n / std::max(c.heldout_rmse_before_n, 1e-12);
-    c.delta_bic = NAN;
-    c.accepted = true;
-    rep.effects.insert(rep.effects.begin(), c);
-    if (rep.verdict == std::vector<std::string>{"none"}) rep.verdict.clear();
-    rep.verdict.insert(rep.verdict.begin(), to_string(Effect::CradleCap));
-    rep.gap_before_rmse_n = c.heldout_rmse_before_n;
+    // runaway at the cap included); after, the baseline on the runs below the cap.
+    put_cap_first(rep, cap->cap_n, heldout(runs_in, {}, fit));
     rep.notes.push_back(fmt::format(
         "every run ran away at {:.0f} N (spread {:.1f} %) while its force was still rising with "
         "slip ({:.0f} % of the initial slope): the force was capped before the tyre's peak (a "
@@ -1004,27 +1014,16 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
     // The cradle capped the roller below the tyre's peak: the roller curve is known up to the cap
     // only, and the road above it is no gap of the tyre's. Before: the whole road runs against
     // the roller curve; after: the road up to the cap (where the rest was ranked).
-    rep.cap_n = cap_n;
     std::vector<Run> whole;
     for (const Run& r : road_all)
       if (r.t_s.size() >= 20) whole.push_back(r);
-    EffectScore c;
-    c.effect = Effect::CradleCap;
-    c.params = {{"cap_n", cap_n}};
-    c.heldout_rmse_before_n = heldout(whole, {}, fit);
-    c.heldout_rmse_after_n = rep.gap_before_rmse_n;
-    c.gain = 1.0 - c.heldout_rmse_after_n / std::max(c.heldout_rmse_before_n, 1e-12);
-    c.delta_bic = NAN;  // found on the roller runs, not fitted to the road
-    c.accepted = true;
-    rep.effects.insert(rep.effects.begin(), c);
-    if (rep.verdict == std::vector<std::string>{"none"}) rep.verdict.clear();
-    rep.verdict.insert(rep.verdict.begin(), to_string(Effect::CradleCap));
-    rep.gap_before_rmse_n = c.heldout_rmse_before_n;
+    const double up_to_cap = rep.gap_before_rmse_n;
+    put_cap_first(rep, cap_n, heldout(whole, {}, fit));
     rep.notes.push_back(fmt::format(
         "the cradle capped the roller at {:.0f} N, below the tyre's peak (Fz sin beta): the roller "
         "shows the tyre only up to that force and the road above it is not a gap of the tyre's "
         "({:.1f} N held out on the whole road runs, {:.1f} N up to the cap)",
-        cap_n, c.heldout_rmse_before_n, c.heldout_rmse_after_n));
+        cap_n, rep.gap_before_rmse_n, up_to_cap));
   }
   return rep;
 }
