@@ -79,13 +79,11 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
                                       gap::Options{});
         },
         cname + " null sets");
-    gates.options = gap::Options{};
     for (const auto& g : per) {
       gates.null_best_gain.push_back(g.null_best_gain.front());
       gates.null_best_delta_bic.push_back(g.null_best_delta_bic.front());
-      gates.options.gate_gain = std::max(gates.options.gate_gain, g.options.gate_gain);
-      gates.options.bic_margin = std::max(gates.options.bic_margin, g.options.bic_margin);
     }
+    sim::set_gates(gates);
   }
   std::cerr << fmt::format(
       "[{}] null best-candidate gain: median {:.3f}, max {:.3f}; best dBIC min {:.1f}; gates: "

@@ -246,12 +246,16 @@ GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
     g.null_best_gain.push_back(best_gain);
     g.null_best_delta_bic.push_back(best_bic);
   }
+  set_gates(g);
+  return g;
+}
+
+void set_gates(GateCalibration& g) {
   const double max_gain = *std::max_element(g.null_best_gain.begin(), g.null_best_gain.end());
   const double min_bic =
       *std::min_element(g.null_best_delta_bic.begin(), g.null_best_delta_bic.end());
-  g.options.gate_gain = std::max(start.gate_gain, 1.5 * max_gain);
-  g.options.bic_margin = std::max(start.bic_margin, -1.5 * min_bic);
-  return g;
+  g.options.gate_gain = std::max(g.options.gate_gain, 1.5 * max_gain);
+  g.options.bic_margin = std::max(g.options.bic_margin, -1.5 * min_bic);
 }
 
 }  // namespace brakefit::sim

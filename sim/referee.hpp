@@ -63,5 +63,8 @@ struct GateCalibration {
 /// they show: gain gate = max(start gate, 1.5 x the largest best-candidate gain), BIC likewise.
 GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
                                 const gap::Options& start);
+/// The gates from the null scores in g (options hold the floors): gain gate = max(floor, 1.5 x
+/// the largest null gain), BIC margin = max(floor, 1.5 x the largest null BIC drop).
+void set_gates(GateCalibration& g);
 
 }  // namespace brakefit::sim

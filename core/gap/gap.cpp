@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <numeric>
+#include <span>
 
 #include "core/curve.hpp"
 #include "core/fit/lm.hpp"
@@ -78,18 +79,23 @@ Options calibrated_options(Condition c, Options base) {
   return base;
 }
 
-std::vector<EffectParam> effect_params(Effect e) {
+std::span<const EffectParam> effect_params(Effect e) {
   // q scales the peak D by 1 + q x deceleration; the slip stiffness B C D scales by
   // (1 + q x deceleration)^r: a tyre's stiffness and peak grow differently with load (MF 6.1:
   // PKX1-3 vs PDX1-2; r 1.3 for the simulated TNO 205/60R15), and one ratio for both misread q by
   // 40 %. Against a held curve E moves with the load as well (PEX2: E += e x relative load).
-  if (e == Effect::LoadTransfer)
-    return {{"dfz_per_decel_s2_per_m", -0.2, 0.2, 0.0}, {"kx_load_ratio", 0.0, 3.0, 1.0}};
-  if (e == Effect::LoadTransferShape)
-    return {{"dfz_per_decel_s2_per_m", -0.2, 0.2, 0.0},
-            {"kx_load_ratio", 0.0, 3.0, 1.0},
-            {"e_per_load", -2.0, 2.0, 0.0}};
-  return {effect_param(e)};
+  // Built once: predict() asks for every evaluation of the fits.
+  constexpr auto kEffects = static_cast<std::size_t>(Effect::CradleCap) + 1;
+  static const std::array<std::vector<EffectParam>, kEffects> table = [] {
+    std::array<std::vector<EffectParam>, kEffects> t;
+    for (std::size_t i = 0; i < kEffects; ++i) t[i] = {effect_param(static_cast<Effect>(i))};
+    t[static_cast<std::size_t>(Effect::LoadTransfer)].push_back({"kx_load_ratio", 0.0, 3.0, 1.0});
+    auto& shape = t[static_cast<std::size_t>(Effect::LoadTransferShape)];
+    shape.push_back({"kx_load_ratio", 0.0, 3.0, 1.0});
+    shape.push_back({"e_per_load", -2.0, 2.0, 0.0});
+    return t;
+  }();
+  return table[static_cast<std::size_t>(e)];
 }
 
 std::size_t param_count(const std::vector<Effect>& effects) {
@@ -536,16 +542,10 @@ Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& eff
   Eigen::Index i = 4;
   for (Effect e : effects)
     for (const EffectParam& ep : effect_params(e)) {
-      lo(i) = ep.lo;
-      hi(i) = ep.hi;
-      x0(i++) = ep.start;
-    }
-  for (std::size_t k = 0, at = 4; k < effects.size(); at += effect_params(effects[k++]).size())
-    if (effects[k] == Effect::CradleCap) {  // the cap starts at the largest force measured
-      const auto j = static_cast<Eigen::Index>(at);
-      lo(j) = 0.3 * peak;
-      hi(j) = 2.0 * peak;
-      x0(j) = peak;
+      const bool cap = e == Effect::CradleCap;  // starts at the largest force measured
+      lo(i) = cap ? 0.3 * peak : ep.lo;
+      hi(i) = cap ? 2.0 * peak : ep.hi;
+      x0(i++) = cap ? peak : ep.start;
     }
   GapProblem problem(runs, effects);
   fit::LmOptions lm;
@@ -955,9 +955,11 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
   // The roller's own effects (relaxation, inertia, threshold, a cradle cap...) would bend its B,
   // C, D, E: with two or more roller runs they are diagnosed first (model vs measurement, roller
   // gates) and the corrected parameters are what the roller says about the tyre.
-  Fit roller_fit = fit_runs(pointers(roller), {}, start);
+  Fit roller_fit;  // one roller run: the plain fit (no run to check an effect on)
   double cap_n = NAN;
-  if (roller.size() >= 2) {
+  if (roller.size() < 2) {
+    roller_fit = fit_runs(pointers(roller), {}, start);
+  } else {
     const Report own = diagnose(roller, start, calibrated_options(Condition::Roller, o));
     roller_fit = own.after;
     cap_n = own.cap_n;

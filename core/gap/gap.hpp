@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -53,7 +54,7 @@ struct EffectParam {
 };
 EffectParam effect_param(Effect e);  ///< the first parameter: the effect's magnitude
 /// All parameters of an effect (load transfer has two: its magnitude and the stiffness ratio).
-std::vector<EffectParam> effect_params(Effect e);
+std::span<const EffectParam> effect_params(Effect e);
 std::size_t param_count(const std::vector<Effect>& effects);  ///< 4 + the effects' parameters
 /// B, C, D, E and the effects' parameter names, in the order of Fit::params.
 std::vector<std::string> param_names(const std::vector<Effect>& effects);
