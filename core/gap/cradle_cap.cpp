@@ -1,0 +1,79 @@
+// The two-roller cradle's force cap, found from how the runs end (a light wheel runs away at the
+// cap while its force still rises with slip).
+#include <algorithm>
+#include <cmath>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+
+namespace brakefit::gap {
+
+/// The run up to its first sample whose slip (or force) is above the limit.
+Run up_to(const Run& r, const std::vector<double>& x, double limit) {
+  std::size_t n = 0;
+  while (n < x.size() && x[n] <= limit) ++n;
+  Run out = r;
+  for (auto* v : {&out.t_s, &out.slip, &out.v_ref_mps, &out.force_n, &out.wheel_accel_mps2,
+                  &out.ref_decel_mps2, &out.pressure_rate_bar_per_s})
+    v->resize(n);
+  return out;
+}
+
+/// Least-squares slope of force over slip for the samples with force in [lo, hi].
+static double force_slope(const Run& r, double lo_n, double hi_n) {
+  double sk = 0, sf = 0, skk = 0, skf = 0, m = 0;
+  for (std::size_t i = 0; i < r.slip.size(); ++i) {
+    if (r.force_n[i] < lo_n || r.force_n[i] > hi_n) continue;
+    sk += r.slip[i];
+    sf += r.force_n[i];
+    skk += r.slip[i] * r.slip[i];
+    skf += r.slip[i] * r.force_n[i];
+    ++m;
+  }
+  const double den = m * skk - sk * sk;
+  return m >= 5 && den > 0 ? (m * skf - sk * sf) / den : NAN;
+}
+
+std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs) {
+  if (runs.size() < 2) return std::nullopt;
+  for (const Run& r : runs)
+    if (r.bench != can::BenchKind::Roller) return std::nullopt;  // a cradle is a roller's
+  double lo = INFINITY, hi = 0, sum = 0, ratio = INFINITY;
+  for (const Run& r : runs) {
+    if (!r.runaway) return std::nullopt;
+    const double f = r.runaway_force_n;
+    lo = std::min(lo, f);
+    hi = std::max(hi, f);
+    sum += f;
+    const double initial = force_slope(r, 0.05 * f, 0.3 * f);
+    const double end = force_slope(r, 0.85 * f, 1.0 * f);
+    if (!(initial > 0) || !std::isfinite(end)) return std::nullopt;
+    ratio = std::min(ratio, end / initial);
+  }
+  CapEvidence e;
+  e.cap_n = sum / static_cast<double>(runs.size());
+  e.spread = (hi - lo) / e.cap_n;
+  e.end_slope_ratio = ratio;
+  if (e.spread > 0.03 || e.end_slope_ratio < 0.3) return std::nullopt;
+  return e;
+}
+
+/// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole
+/// runs' (gap_whole_n), after the gap below the cap (rep's baseline gap so far).
+void put_cap_first(Report& rep, double cap_n, double gap_whole_n) {
+  rep.cap_n = cap_n;
+  EffectScore c;
+  c.effect = Effect::CradleCap;
+  c.params = {{"cap_n", cap_n}};
+  c.heldout_rmse_before_n = gap_whole_n;
+  c.heldout_rmse_after_n = rep.gap_before_rmse_n;
+  c.gain = 1.0 - c.heldout_rmse_after_n / std::max(c.heldout_rmse_before_n, 1e-12);
+  c.delta_bic = NAN;  // not a fitted model
+  c.accepted = true;
+  rep.effects.insert(rep.effects.begin(), c);
+  if (rep.verdict == std::vector<std::string>{"none"}) rep.verdict.clear();
+  rep.verdict.insert(rep.verdict.begin(), to_string(Effect::CradleCap));
+  rep.gap_before_rmse_n = gap_whole_n;
+}
+
+}  // namespace brakefit::gap

@@ -1,0 +1,162 @@
+// The two modes: model vs measurement (diagnose) and bench vs bench (diagnose_transfer).
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+
+namespace brakefit::gap {
+
+Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Options& o) {
+  if (runs_in.size() < 2)
+    throw InputError(
+        "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
+        "to)");
+  // A force cap (a two-roller cradle): the runs end in a runaway at the cap; the samples from 98 %
+  // of the cap on are that runaway, not the tyre, and are left out.
+  const auto cap = cradle_cap_evidence(runs_in);
+  std::vector<Run> runs;
+  for (const Run& r : runs_in) {
+    Run cut = cap ? up_to(r, r.force_n, 0.98 * cap->cap_n) : r;
+    if (cut.t_s.size() >= 20) runs.push_back(std::move(cut));
+  }
+  if (runs.size() < 2)
+    throw InputError("gap diagnosis: fewer than two runs with 20 samples below the force cap");
+  Report rep;
+  rep.noise_n = noise_of(runs);
+  rep.before = fit_runs(pointers(runs), {}, start);
+  const MfParams base{
+      rep.before.params[0], rep.before.params[1], rep.before.params[2], rep.before.params[3], 0, 0};
+  // Two starts for every fit: the baseline (B, C, D, E that absorbed the effect, often the
+  // nearest) and a neutral curve from the data (its peak and initial slope, C 1.65, E 0), which
+  // the baseline's distortion cannot trap: wheel inertia on the ground pulled the baseline to
+  // E 0.92, from where the fit with the effect stopped in a local minimum at 2x the noise.
+  const MfParams neutral = neutral_start(runs);
+  const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
+    Fit a = fit_runs(train, e, base);
+    Fit b = fit_runs(train, e, neutral);
+    return b.ssr < a.ssr ? b : a;
+  };
+  rep.gap_before_rmse_n = heldout(runs, {}, fit);
+  rep.where = where_rows(runs, rep.before.params);
+
+  // A cradle cap exists on a roller only.
+  std::vector<Effect> candidates;
+  for (Effect e : kAllEffects)
+    if (e != Effect::CradleCap || runs.front().bench == can::BenchKind::Roller)
+      candidates.push_back(e);
+  select_effects(rep, runs, candidates, fit, o,
+                 "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at "
+                 "other speeds or ramp rates would");
+  if (cap) {
+    // Found from how the runs end, not fitted: before, the baseline on the whole runs (the
+    // runaway at the cap included); after, the baseline on the runs below the cap.
+    put_cap_first(rep, cap->cap_n, heldout(runs_in, {}, fit));
+    rep.notes.push_back(fmt::format(
+        "every run ran away at {:.0f} N (spread {:.1f} %) while its force was still rising with "
+        "slip ({:.0f} % of the initial slope): the force was capped before the tyre's peak (a "
+        "two-roller cradle caps it at Fz sin beta); the samples from 98 % of the cap on (the "
+        "runaway) are left out, and B, C, D, E describe the curve only up to that force",
+        cap->cap_n, 100 * cap->spread, 100 * cap->end_slope_ratio));
+  } else if (const auto it = std::find(rep.accepted.begin(), rep.accepted.end(), Effect::CradleCap);
+             it != rep.accepted.end()) {
+    std::size_t at = 4;
+    for (auto e = rep.accepted.begin(); e != it; ++e) at += effect_params(*e).size();
+    rep.cap_n = rep.after.params[at];
+  }
+  if (std::find(rep.accepted.begin(), rep.accepted.end(), Effect::LoadTransfer) !=
+      rep.accepted.end())
+    rep.notes.push_back(
+        "on one bench the deceleration follows the braking force, so load transfer reshapes the "
+        "curve as a function of slip alone: a tyre whose curve is not a Magic Formula can look "
+        "like it (checked here: its stiffness ratio is inside its range); roller runs without "
+        "deceleration (--roller/--road) separate the two");
+  return rep;
+}
+
+Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>& road_all,
+                         const MfParams& start, const Options& o) {
+  if (roller.empty()) throw InputError("bench-vs-bench gap: no usable roller run");
+  Report rep;
+  // The roller's own effects (relaxation, inertia, threshold, a cradle cap...) would bend its B,
+  // C, D, E: with two or more roller runs they are diagnosed first (model vs measurement, roller
+  // gates) and the corrected parameters are what the roller says about the tyre.
+  Fit roller_fit;  // one roller run: the plain fit (no run to check an effect on)
+  double cap_n = NAN;
+  if (roller.size() < 2) {
+    roller_fit = fit_runs(pointers(roller), {}, start);
+  } else {
+    const Report own = diagnose(roller, start, calibrated_options(Condition::Roller, o));
+    roller_fit = own.after;
+    cap_n = own.cap_n;
+    std::vector<std::string> names;
+    for (const auto& v : own.verdict)
+      if (v != "none" && v != "unexplained") names.push_back(v);
+    if (!names.empty())
+      rep.notes.push_back(fmt::format(
+          "the roller runs were corrected for their own {} before their B, C, D, E were carried to "
+          "the road",
+          fmt::join(names, ", ")));
+  }
+  const bool capped = std::isfinite(cap_n);
+  // The roller fit says nothing beyond what the roller runs reached (a roller test stops near
+  // the peak, or at the cap): the road runs are compared up to that slip (or force).
+  double max_slip = 0;
+  for (const Run& r : roller)
+    for (double k : r.slip) max_slip = std::max(max_slip, k);
+  std::vector<Run> road;
+  std::size_t dropped = 0, total = 0;
+  for (const Run& r : road_all) {
+    Run cut = capped ? up_to(r, r.force_n, cap_n) : up_to(r, r.slip, max_slip);
+    total += r.t_s.size();
+    dropped += r.t_s.size() - cut.t_s.size();
+    if (cut.t_s.size() >= 20) road.push_back(std::move(cut));
+  }
+  if (road.size() < 2)
+    throw InputError(
+        "bench-vs-bench gap needs at least two road runs (each transfer effect is checked on a "
+        "road run it was not fitted to) with 20 samples within the roller runs' reach");
+  if (dropped > 0)
+    rep.notes.push_back(
+        capped ? fmt::format("the road runs are compared up to the roller's cap, {:.0f} N ({} of "
+                             "{} road samples above it are left out: the roller says nothing "
+                             "there)",
+                             cap_n, dropped, total)
+               : fmt::format("the road runs are compared up to {:.1f} % slip, the largest the "
+                             "roller runs reached ({} of {} road samples beyond it are left out: "
+                             "the roller fit says nothing there)",
+                             100 * max_slip, dropped, total));
+  rep.noise_n = noise_of(road);
+  const MfParams base{
+      roller_fit.params[0], roller_fit.params[1], roller_fit.params[2], roller_fit.params[3], 0, 0};
+  const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
+    return fit_effects(train, e, base);  // the roller's B, C, D, E held
+  };
+  rep.before = fit(pointers(road), {});  // the roller's parameters on the road
+  rep.before.stderr_.assign(roller_fit.stderr_.begin(), roller_fit.stderr_.begin() + 4);
+  rep.gap_before_rmse_n = heldout(road, {}, fit);
+  rep.where = where_rows(road, rep.before.params);
+  select_effects(rep, road, {kTransferEffects.begin(), kTransferEffects.end()}, fit, o,
+                 "the road runs cannot separate {} from {} (held-out gains {:.3f} and {:.3f})");
+  if (capped) {
+    // The cradle capped the roller below the tyre's peak: the roller curve is known up to the cap
+    // only, and the road above it is no gap of the tyre's. Before: the whole road runs against
+    // the roller curve; after: the road up to the cap (where the rest was ranked).
+    std::vector<Run> whole;
+    for (const Run& r : road_all)
+      if (r.t_s.size() >= 20) whole.push_back(r);
+    const double up_to_cap = rep.gap_before_rmse_n;
+    put_cap_first(rep, cap_n, heldout(whole, {}, fit));
+    rep.notes.push_back(fmt::format(
+        "the cradle capped the roller at {:.0f} N, below the tyre's peak (Fz sin beta): the roller "
+        "shows the tyre only up to that force and the road above it is not a gap of the tyre's "
+        "({:.1f} N held out on the whole road runs, {:.1f} N up to the cap)",
+        cap_n, rep.gap_before_rmse_n, up_to_cap));
+  }
+  return rep;
+}
+
+}  // namespace brakefit::gap

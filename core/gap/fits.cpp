@@ -1,0 +1,134 @@
+// Joint least-squares fits of B, C, D, E and the effects' parameters over runs (or the effects
+// alone with B, C, D, E held), by the bounded Levenberg-Marquardt of core/fit.
+#include <algorithm>
+#include <cmath>
+
+#include "core/fit/lm.hpp"
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+
+namespace brakefit::gap {
+
+double Fit::bic() const {
+  const double n = static_cast<double>(points);
+  return n * std::log(std::max(ssr, 1e-300) / n) + static_cast<double>(params.size()) * std::log(n);
+}
+
+namespace {
+
+class GapProblem final : public fit::LeastSquaresProblem {
+ public:
+  GapProblem(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
+             std::vector<double> fixed_base = {})
+      : runs_(runs), effects_(effects), base_(std::move(fixed_base)) {
+    for (const Run* r : runs_) n_ += static_cast<Eigen::Index>(r->t_s.size());
+  }
+  Eigen::Index residual_count() const override { return n_; }
+  void evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& res, Eigen::MatrixXd* j) const override {
+    residuals(x, res);
+    if (!j) return;
+    Eigen::VectorXd rp(n_), rm(n_);
+    for (Eigen::Index k = 0; k < x.size(); ++k) {
+      const double h = 1e-6 * std::max(1.0, std::abs(x(k)));
+      Eigen::VectorXd xp = x, xm = x;
+      xp(k) += h;
+      xm(k) -= h;
+      residuals(xp, rp);
+      residuals(xm, rm);
+      j->col(k) = (rp - rm) / (2 * h);
+    }
+  }
+
+ private:
+  void residuals(const Eigen::VectorXd& x, Eigen::VectorXd& res) const {
+    std::vector<double> p = base_;  // empty unless B, C, D, E are held
+    p.insert(p.end(), x.data(), x.data() + x.size());
+    Eigen::Index o = 0;
+    for (const Run* r : runs_) {
+      const auto f = predict(*r, p, effects_);
+      for (std::size_t i = 0; i < f.size(); ++i) res(o++) = f[i] - r->force_n[i];
+    }
+  }
+  const std::vector<const Run*>& runs_;
+  const std::vector<Effect>& effects_;
+  std::vector<double> base_;
+  Eigen::Index n_ = 0;
+};
+
+}  // namespace
+
+Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
+             const MfParams& start) {
+  const auto np = static_cast<Eigen::Index>(param_count(effects));
+  double peak = 0;
+  for (const Run* r : runs)
+    for (double f : r->force_n) peak = std::max(peak, std::abs(f));
+  Eigen::VectorXd lo(np), hi(np), x0(np);
+  lo.head(4) << 0.1, 0.3, 0.0, -20.0;
+  hi.head(4) << 200.0, 3.0, 5.0 * peak, 1.0;
+  x0.head(4) << start.B, start.C, start.D, start.E;
+  Eigen::Index i = 4;
+  for (Effect e : effects)
+    for (const EffectParam& ep : effect_params(e)) {
+      const bool cap = e == Effect::CradleCap;  // starts at the largest force measured
+      lo(i) = cap ? 0.3 * peak : ep.lo;
+      hi(i) = cap ? 2.0 * peak : ep.hi;
+      x0(i++) = cap ? peak : ep.start;
+    }
+  GapProblem problem(runs, effects);
+  fit::LmOptions lm;
+  lm.max_iterations = 100;
+  const fit::LmResult r = fit::minimize(problem, x0, lo, hi, lm);
+  Fit out;
+  out.params.assign(r.x.data(), r.x.data() + r.x.size());
+  out.stderr_.assign(r.standard_errors.data(), r.standard_errors.data() + r.standard_errors.size());
+  out.ssr = r.ssr;
+  out.points = static_cast<std::size_t>(problem.residual_count());
+  return out;
+}
+
+Fit fit_effects(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
+                const MfParams& base) {
+  const std::vector<double> b{base.B, base.C, base.D, base.E};
+  Fit out;
+  out.params = b;
+  out.stderr_.assign(4, NAN);
+  std::size_t n = 0;
+  for (const Run* r : runs) n += r->t_s.size();
+  out.points = n;
+  if (effects.empty()) {
+    for (const Run* r : runs) {
+      const auto f = predict(*r, b, {});
+      for (std::size_t i = 0; i < f.size(); ++i)
+        out.ssr += (f[i] - r->force_n[i]) * (f[i] - r->force_n[i]);
+    }
+    return out;
+  }
+  const auto np = static_cast<Eigen::Index>(param_count(effects) - 4);
+  Eigen::VectorXd lo(np), hi(np), x0(np);
+  Eigen::Index i = 0;
+  for (Effect e : effects)
+    for (const EffectParam& ep : effect_params(e)) {
+      lo(i) = ep.lo;
+      hi(i) = ep.hi;
+      x0(i++) = ep.start;
+    }
+  GapProblem problem(runs, effects, b);
+  fit::LmOptions lm;
+  lm.max_iterations = 100;
+  const fit::LmResult r = fit::minimize(problem, x0, lo, hi, lm);
+  out.params.insert(out.params.end(), r.x.data(), r.x.data() + r.x.size());
+  out.stderr_.insert(out.stderr_.end(), r.standard_errors.data(),
+                     r.standard_errors.data() + r.standard_errors.size());
+  out.ssr = r.ssr;
+  return out;
+}
+
+double rmse(const Run& r, const std::vector<double>& params, const std::vector<Effect>& effects) {
+  const auto f = predict(r, params, effects);
+  double s = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) s += (f[i] - r.force_n[i]) * (f[i] - r.force_n[i]);
+  return std::sqrt(s / static_cast<double>(f.size()));
+}
+
+}  // namespace brakefit::gap

@@ -1,0 +1,45 @@
+#pragma once
+// Helpers shared by the diagnosis's own files (conditioning, effects, fits, selection, cradle cap,
+// the two modes); not part of the public interface in gap.hpp.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/gap/gap.hpp"
+
+namespace brakefit::gap {
+
+/// MF 6.1 reference speed V0 (LONGVL), m/s.
+inline constexpr double kLongVl = 16.7;
+
+/// Zero-phase Savitzky-Golay smoothing (quadratic, centred; the window shrinks at the ends).
+std::vector<double> smooth(const std::vector<double>& x, int half_window);
+/// Central differences (one-sided at the ends).
+std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x);
+/// Linear interpolation of x(t) at `at`, held at the ends.
+double interp(const std::vector<double>& t, const std::vector<double>& x, double at);
+
+/// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
+using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
+/// Leave-one-run-out: RMS over runs of the held-out RMSE with parameters fitted on the others.
+double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects, const Fitter& fit);
+/// RMS of the runs' noise floors.
+double noise_of(const std::vector<Run>& runs);
+std::vector<const Run*> pointers(const std::vector<Run>& runs);
+/// Where: residual of the 4-parameter model by slip region, by phase, by run.
+std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params);
+/// A neutral Magic Formula for the runs: D their peak force, C 1.65, E 0, B from the initial slope.
+MfParams neutral_start(const std::vector<Run>& runs);
+/// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,
+/// gap_before_rmse_n, noise_n); fills effects, accepted, after, gap_after_rmse_n, verdict, notes.
+void select_effects(Report& rep, const std::vector<Run>& runs,
+                    const std::vector<Effect>& candidates, const Fitter& fit, const Options& o,
+                    const char* separability_note);
+
+/// The run up to its first sample whose slip (or force) is above the limit.
+Run up_to(const Run& r, const std::vector<double>& x, double limit);
+/// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole
+/// runs' (gap_whole_n), after the gap below the cap (rep's baseline gap so far).
+void put_cap_first(Report& rep, double cap_n, double gap_whole_n);
+
+}  // namespace brakefit::gap
