@@ -10,8 +10,8 @@
 #include "brakefit/version.hpp"
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
-#include "core/event_json.hpp"
 #include "cli/recording.hpp"
+#include "core/event_json.hpp"
 #include "core/plot/svg.hpp"
 
 namespace brakefit::cli {
@@ -28,6 +28,7 @@ struct Side {
   std::array<double, 4> spread{};  ///< standard deviation of the per-event fits (NaN for one event)
   double rmse_n = 0.0;
   double peak_force_n = 0.0, peak_slip_ratio = 0.0;
+  std::vector<LeftOut> left_out;  ///< events not used, with the reason
 };
 
 std::vector<std::string> expand(const std::string& p) {
@@ -49,6 +50,7 @@ Side load_side(const std::string& path, const RunOptions& ro, const Model& model
   for (const auto& f : s.files) {
     Run run = process_run(f, ro, &model);
     for (auto& e : run.events) {
+      if (!e.event.fittable()) leave_out(s.left_out, run, e.event, flagged_reason(e.event));
       for (auto& r : e.results)
         if (r.method == method) {
           s.fits.push_back(r);
@@ -56,7 +58,9 @@ Side load_side(const std::string& path, const RunOptions& ro, const Model& model
         }
     }
   }
-  if (s.fits.empty()) throw InputError(path + ": no fitted brake event");
+  if (s.fits.empty())
+    throw InputError(fmt::format("{}: no fitted brake event ({} left out, see the warnings)", path,
+                                 s.left_out.size()));
   // One fit to the pooled points: averaging nonlinear parameters of poorly identified fits would
   // give a curve that goes through none of the data.
   Curve pooled;
@@ -88,6 +92,7 @@ nlohmann::ordered_json side_json(const Side& s) {
   j["label"] = s.label;
   j["files"] = s.files;
   j["events"] = s.fits.size();
+  j["left_out"] = left_out_json(s.left_out);
   j["B"] = num(s.mean.B);
   j["C"] = num(s.mean.C);
   j["D"] = num(s.mean.D);

@@ -7,8 +7,8 @@
 
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
-#include "core/event_json.hpp"
 #include "cli/recording.hpp"
+#include "core/event_json.hpp"
 #include "core/pipeline/event_csv.hpp"
 #include "core/plot/charts.hpp"
 
@@ -63,8 +63,10 @@ void add_replay_command(CLI::App& app) {
     }
     if (!o->report.empty()) std::filesystem::create_directories(o->report);
     std::string jsonl;
+    std::vector<LeftOut> left_out;  // flagged events: in their JSON (flags) and on stderr
     for (const Run& run : runs) {
       for (const auto& e : run.events) {
+        if (!e.event.fittable()) leave_out(left_out, run, e.event, flagged_reason(e.event));
         const auto doc = event_json(e, run.path, &model);
         jsonl += doc.dump() + "\n";
         if (!o->report.empty() && !e.results.empty()) {

@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <fmt/ranges.h>
+
 #include <filesystem>
 
 #include "cli/commands.hpp"
@@ -22,8 +24,13 @@ Run process_run(const std::string& path, const RunOptions& o, const Model* model
     if (po.force == pipeline::ForceSource::Tester && !ev.has_force)
       throw InputError(path + ": --force tester needs a force_n column");
     pipeline::Pipeline p(run.calibration, po, model);
+    if (ev.repeated_stamps)
+      spdlog::warn(
+          "{}: {} rows repeated the previous row's time stamp (a coarse clock); they were "
+          "spread evenly up to the next stamp",
+          path, ev.repeated_stamps);
     for (const auto& s : ev.samples) p.feed(s);
-    p.finish();
+    p.finish_file();  // an event file is one event: its last row ends it
     run.events = std::move(p.events());
     return run;
   }
@@ -52,6 +59,23 @@ Run process_run(const std::string& path, const RunOptions& o, const Model* model
     spdlog::info("{}: {} frames with unknown ids ignored", path, run.stats.unknown_ids);
   run.events = std::move(p.events());
   return run;
+}
+
+void leave_out(std::vector<LeftOut>& out, const Run& run, const pipeline::Event& e,
+               const std::string& reason) {
+  spdlog::warn("{}: event {} left out: {}", run.path, e.event_id, reason);
+  out.push_back({run.path, e.event_id, reason});
+}
+
+std::string flagged_reason(const pipeline::Event& e) {
+  return fmt::format("flagged {} (ended by {})", fmt::join(e.flags, ", "), e.end_reason);
+}
+
+nlohmann::ordered_json left_out_json(const std::vector<LeftOut>& left_out) {
+  auto j = nlohmann::ordered_json::array();
+  for (const auto& l : left_out)
+    j.push_back({{"file", l.file}, {"event_id", l.event_id}, {"reason", l.reason}});
+  return j;
 }
 
 }  // namespace brakefit::cli

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/pipeline/pipeline.hpp"
 
 namespace brakefit::cli {
@@ -26,5 +28,19 @@ struct Run {
 };
 
 Run process_run(const std::string& path, const RunOptions& o, const Model* model);
+
+/// An event a command did not use, and why: every command names them on stderr and in its JSON
+/// ("left_out"), so nothing is dropped silently.
+struct LeftOut {
+  std::string file;
+  int event_id = 0;
+  std::string reason;
+};
+/// Records (and logs as a warning) that this event of this run was left out.
+void leave_out(std::vector<LeftOut>& out, const Run& run, const pipeline::Event& e,
+               const std::string& reason);
+/// The reason a flagged event is not fitted: its flags and how it ended.
+std::string flagged_reason(const pipeline::Event& e);
+nlohmann::ordered_json left_out_json(const std::vector<LeftOut>& left_out);
 
 }  // namespace brakefit::cli

@@ -16,10 +16,11 @@ Calibration parse_calibration(std::string_view text, const std::string& source) 
 Calibration calibration_from_table(const toml::table& bt, const TomlReader& rd,
                                    const std::string& p) {
   const toml::table* b = &bt;
-  rd.check_keys(*b, p,
-                {"kind", "roller_radius_m", "wheel_radius_m", "fifth_wheel_radius_m", "roller_ppr",
-                 "wheel_ppr", "fifth_wheel_ppr", "brake_gain_n_per_bar", "wheel_load_n",
-                 "tyre_pressure_bar", "speed_kmh", "switch_off_slip_ratio"});
+  rd.check_keys(
+      *b, p,
+      {"kind", "roller_radius_m", "wheel_radius_m", "fifth_wheel_radius_m", "roller_ppr",
+       "wheel_ppr", "fifth_wheel_ppr", "brake_gain_n_per_bar", "wheel_load_n", "tyre_pressure_bar",
+       "speed_kmh", "switch_off_slip_ratio", "speed_timing", "pressure_filter_s"});
   Calibration c;
   const std::string kind = rd.string(*b, p, "kind", "roller");
   if (kind == "roller")
@@ -42,6 +43,10 @@ Calibration calibration_from_table(const toml::table& bt, const TomlReader& rd,
   c.speed_kmh = rd.number(*b, p, "speed_kmh", c.speed_kmh, 0.1, 300);
   c.switch_off_slip_ratio =
       rd.number(*b, p, "switch_off_slip_ratio", c.switch_off_slip_ratio, 0.01, 1.0);
+  c.speed_timing = rd.string(*b, p, "speed_timing", c.speed_timing);
+  if (c.speed_timing != "frame_mean" && c.speed_timing != "instant")
+    rd.fail(p + "speed_timing", "expected 'frame_mean' or 'instant'");
+  c.pressure_filter_s = rd.number(*b, p, "pressure_filter_s", c.pressure_filter_s, 0.0, 1.0);
   return c;
 }
 
@@ -51,10 +56,11 @@ std::string format_calibration(const Calibration& c) {
       "{}\nroller_ppr = {}\n"
       "wheel_ppr = {}\nfifth_wheel_ppr = {}\nbrake_gain_n_per_bar = {}\nwheel_load_n = "
       "{}\ntyre_pressure_bar = {}\n"
-      "speed_kmh = {}\nswitch_off_slip_ratio = {}\n",
+      "speed_kmh = {}\nswitch_off_slip_ratio = {}\nspeed_timing = \"{}\"\npressure_filter_s = {}\n",
       can::to_string(c.bench), c.roller_radius_m, c.wheel_radius_m, c.fifth_wheel_radius_m,
       c.roller_ppr, c.wheel_ppr, c.fifth_wheel_ppr, c.brake_gain_n_per_bar, c.wheel_load_n,
-      c.tyre_pressure_bar, c.speed_kmh, c.switch_off_slip_ratio);
+      c.tyre_pressure_bar, c.speed_kmh, c.switch_off_slip_ratio, c.speed_timing,
+      c.pressure_filter_s);
 }
 
 }  // namespace brakefit::pipeline

@@ -23,6 +23,14 @@ struct Calibration {
   double tyre_pressure_bar = 2.2;
   double speed_kmh = 5.0;  ///< roller set speed or ground start speed
   double switch_off_slip_ratio = 0.27;
+  /// How the speeds were sampled: "frame_mean" (an encoder frame's speed is the mean since the
+  /// previous frame, as the project's encoder frames and its own exports), or "instant" (an event
+  /// CSV from elsewhere that does not say: taken at the stamp).
+  std::string speed_timing = "frame_mean";
+  /// A first-order filter the tester applied to the pressure channel before export (its time
+  /// constant, s; 0: none). The diagnosis undoes a declared filter; an undeclared one shows as
+  /// a late force channel (time_offset).
+  double pressure_filter_s = 0.0;
 };
 
 Calibration parse_calibration(std::string_view toml_text, const std::string& source);

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 
@@ -18,6 +19,30 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
+/// Rows that share a stamp (a coarse clock) keep their order and are spread evenly up to the next
+/// stamp (the last ones by the median interval): averaging them would invent values between a
+/// quantised channel's levels, and dropping them loses data.
+void spread_repeated_stamps(std::vector<Sample>& s) {
+  std::vector<std::int64_t> dts;
+  for (std::size_t i = 1; i < s.size(); ++i)
+    if (s[i].t_ns > s[i - 1].t_ns) dts.push_back(s[i].t_ns - s[i - 1].t_ns);
+  if (dts.empty()) return;
+  std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
+  const std::int64_t median = dts[dts.size() / 2];
+  for (std::size_t i = 0; i < s.size();) {
+    std::size_t j = i + 1;
+    while (j < s.size() && s[j].t_ns == s[i].t_ns) ++j;
+    if (j - i > 1) {
+      const std::int64_t t0 = s[i].t_ns;
+      const std::int64_t span =
+          j < s.size() ? s[j].t_ns - t0 : median * static_cast<std::int64_t>(j - i);
+      for (std::size_t k = i + 1; k < j; ++k)
+        s[k].t_ns = t0 + span * static_cast<std::int64_t>(k - i) / static_cast<std::int64_t>(j - i);
+    }
+    i = j;
+  }
+}
+
 }  // namespace
 
 bool looks_like_event_csv(std::string_view text) {
@@ -32,6 +57,7 @@ EventCsv parse_event_csv(std::string_view text, const std::string& source) {
   std::vector<std::string> cols;
   std::size_t line_no = 0, pos = 0;
   int c_t = -1, c_ref = -1, c_wheel = -1, c_p = -1, c_f = -1;
+  bool timing_given = false;  // else the speeds of a file from elsewhere are taken at the stamp
   auto fail = [&](const std::string& msg) {
     return InputError(fmt::format("{}:{}: {}", source, line_no, msg));
   };
@@ -50,6 +76,8 @@ EventCsv parse_event_csv(std::string_view text, const std::string& source) {
       if (key == "event_id" || key == "end_reason") continue;  // informational
       if (key == "bench")
         meta += fmt::format("kind = \"{}\"\n", std::string(value));
+      else if (key == "speed_timing")
+        meta += fmt::format("speed_timing = \"{}\"\n", std::string(value)), timing_given = true;
       else
         meta += fmt::format("{} = {}\n", std::string(key), std::string(value));
       continue;
@@ -100,17 +128,23 @@ EventCsv parse_event_csv(std::string_view text, const std::string& source) {
     if (v.size() != cols.size())
       throw fail(fmt::format("expected {} columns, got {}", cols.size(), v.size()));
     Sample s;
-    s.t_ns = std::llround(v[static_cast<std::size_t>(c_t)] * 1e9);
-    if (!out.samples.empty() && s.t_ns <= out.samples.back().t_ns) throw fail("t_s must increase");
+    const double t_s = v[static_cast<std::size_t>(c_t)];
+    if (std::abs(t_s) > 1e9) throw fail(fmt::format("t_s {} is out of range", t_s));
+    s.t_ns = std::llround(t_s * 1e9);
     s.v_ref_mps = v[static_cast<std::size_t>(c_ref)];
     s.v_wheel_mps = v[static_cast<std::size_t>(c_wheel)];
     s.pressure_bar = v[static_cast<std::size_t>(c_p)];
     if (c_f >= 0) s.force_n = v[static_cast<std::size_t>(c_f)];
     s.state = can::TestState::Measuring;
+    if (!out.samples.empty() && s.t_ns < out.samples.back().t_ns)
+      throw fail(fmt::format("t_s {} is before the previous row's", t_s));
+    if (!out.samples.empty() && s.t_ns == out.samples.back().t_ns) ++out.repeated_stamps;
     out.samples.push_back(s);
   }
+  spread_repeated_stamps(out.samples);
   if (cols.empty()) throw fail("no column header");
   out.calibration = parse_calibration(meta, source + " (# key=value header)");
+  if (!timing_given) out.calibration.speed_timing = "instant";
   return out;
 }
 
@@ -119,8 +153,9 @@ std::string format_event_csv(const Event& e, const Calibration& c) {
   s += fmt::format(
       "# wheel_radius_m={}\n# wheel_load_n={}\n# brake_gain_n_per_bar={}\n# tyre_pressure_bar={}\n",
       c.wheel_radius_m, c.wheel_load_n, c.brake_gain_n_per_bar, c.tyre_pressure_bar);
-  s += fmt::format("# speed_kmh={}\n# switch_off_slip_ratio={}\n", c.speed_kmh,
-                   c.switch_off_slip_ratio);
+  s += fmt::format("# speed_kmh={}\n# switch_off_slip_ratio={}\n# speed_timing={}\n", c.speed_kmh,
+                   c.switch_off_slip_ratio, c.speed_timing);
+  if (c.pressure_filter_s > 0) s += fmt::format("# pressure_filter_s={}\n", c.pressure_filter_s);
   s += fmt::format("# event_id={}\n# end_reason={}\n", e.event_id, e.end_reason);
   const bool force = !e.samples.empty() && std::isfinite(e.samples.front().force_n);
   s += force ? "t_s,v_ref_mps,v_wheel_mps,pressure_bar,force_n\n"

@@ -2,7 +2,9 @@
 // Event CSV: one brake event with its bench metadata, so data from other benches can be analysed.
 //   # bench=roller
 //   # wheel_radius_m=0.3  (also wheel_load_n, brake_gain_n_per_bar, tyre_pressure_bar, speed_kmh,
-//   ...) t_s,v_ref_mps,v_wheel_mps,pressure_bar[,force_n]
+//   ...; speed_timing=frame_mean|instant, absent: instant; pressure_filter_s, a declared
+//   first-order filter of the pressure channel)
+//   t_s,v_ref_mps,v_wheel_mps,pressure_bar[,force_n]
 #include <string>
 #include <string_view>
 #include <vector>
@@ -16,9 +18,13 @@ struct EventCsv {
   Calibration calibration;
   std::vector<Sample> samples;
   bool has_force = false;
+  /// Rows that repeated the previous row's time stamp (a tester's export at a coarse clock): they
+  /// keep their order and are spread evenly up to the next stamp.
+  std::size_t repeated_stamps = 0;
 };
 
-/// Throws InputError "SOURCE:LINE: ..." (unknown or malformed keys, missing columns, bad numbers).
+/// Throws InputError "SOURCE:LINE: ..." (unknown or malformed keys, missing columns, bad numbers,
+/// a time stamp before the previous one). Rows sharing a stamp are spread evenly up to the next.
 EventCsv parse_event_csv(std::string_view text, const std::string& source);
 std::string format_event_csv(const Event& e, const Calibration& c);
 /// True when the text looks like an event CSV rather than a candump log.

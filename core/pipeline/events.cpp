@@ -8,6 +8,7 @@ namespace brakefit::pipeline {
 std::optional<Event> EventDetector::close(const std::string& reason, bool aborted) {
   Event e = std::move(*cur_);
   cur_.reset();
+  recent_slip_.clear();
   armed_ = false;
   e.end_reason = reason;
   e.t_end_ns = e.samples.empty() ? e.t_start_ns : e.samples.back().t_ns;
@@ -42,7 +43,14 @@ std::optional<Event> EventDetector::feed(const Sample& s) {
   if (s.sensor_fault &&
       std::find(cur_->flags.begin(), cur_->flags.end(), "sensor_fault") == cur_->flags.end())
     cur_->flags.push_back("sensor_fault");
-  const double slip = slip_ratio(s);
+  // The end decisions on the slip filtered over end_filter_s (the mean of those samples).
+  recent_slip_.emplace_back(s.t_ns, slip_ratio(s));
+  const auto window_ns = static_cast<std::int64_t>(set_.end_filter_s * 1e9);
+  while (recent_slip_.size() > 1 && s.t_ns - recent_slip_.front().first > window_ns)
+    recent_slip_.pop_front();
+  double slip = 0;
+  for (const auto& [t, k] : recent_slip_) slip += k;
+  slip /= static_cast<double>(recent_slip_.size());
   if (s.v_ref_mps < set_.min_ref_speed_mps) return close("stopped", false);
   if (slip >= set_.lock_slip_ratio) return close("wheel_lock", false);
   if (cal_.bench == can::BenchKind::Roller &&
@@ -56,6 +64,11 @@ std::optional<Event> EventDetector::feed(const Sample& s) {
 std::optional<Event> EventDetector::finish() {
   if (!cur_) return std::nullopt;
   return close("end_of_data", true);
+}
+
+std::optional<Event> EventDetector::finish_file() {
+  if (!cur_) return std::nullopt;
+  return close("end_of_file", false);
 }
 
 std::optional<Event> EventDetector::abort(const std::string& reason) {

@@ -1,8 +1,12 @@
 #pragma once
 // Brake event detection on the sample stream: an event starts when the pressure rises past a
 // threshold and ends at the switch-off slip (roller), wheel lock, release of the pedal, the
-// reference stopping, or a sensor timeout (aborted). Too short or aborted events are flagged and
-// not fitted.
+// reference stopping, or a sensor timeout (aborted). The switch-off and lock decisions use the
+// slip filtered over the last end_filter_s (the mean of the samples in that window), not one raw
+// sample: one noisy or quantised sample must not end a stop. An event file (one exported event)
+// ends at its last row: finished, end_of_file. Too short or aborted events are flagged and not
+// fitted.
+#include <deque>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +25,9 @@ struct EventSettings {
   std::size_t min_points = 30;
   double min_duration_s = 0.2;
   double sensor_timeout_s = 0.1;  ///< a gap between samples longer than this aborts the event
+  /// Switch-off and lock compare the mean slip of the samples within this window (5 ms: five
+  /// samples at 1 kHz) with their thresholds.
+  double end_filter_s = 0.005;
 };
 
 struct Event {
@@ -29,7 +36,8 @@ struct Event {
   std::int64_t t_start_ns = 0;
   std::int64_t t_end_ns = 0;
   std::string
-      end_reason;  ///< switch_off_slip, wheel_lock, release, stopped, sensor_timeout, end_of_data
+      end_reason;  ///< switch_off_slip, wheel_lock, release, stopped, sensor_timeout,
+                   ///< end_of_data (aborted), end_of_file (an event file's last row: finished)
   std::vector<std::string> flags;  ///< too_short, aborted, sensor_fault
   std::vector<Sample> samples;
   bool fittable() const { return flags.empty(); }
@@ -44,8 +52,11 @@ class EventDetector {
   EventDetector(const Calibration& c, const EventSettings& s) : cal_(c), set_(s) {}
   /// Returns an event when this sample finished one.
   std::optional<Event> feed(const Sample& s);
-  /// End of data: a running event is returned, flagged aborted.
+  /// End of data: a running event is returned, flagged aborted (a log cut mid-stop).
   std::optional<Event> finish();
+  /// End of an event file (one exported event): its last row ends a running event, which is
+  /// finished (end_of_file), not aborted.
+  std::optional<Event> finish_file();
   /// Ends a running event now, flagged aborted (sensor timeout seen by the daemon's clock,
   /// operator abort, shutdown).
   std::optional<Event> abort(const std::string& reason);
@@ -61,6 +72,7 @@ class EventDetector {
   int next_id_ = 1;
   bool armed_ = true;  ///< a new event needs the pedal released first
   std::int64_t last_t_ns_ = 0;
+  std::deque<std::pair<std::int64_t, double>> recent_slip_;  ///< (t_ns, slip) within end_filter_s
 };
 
 enum class ForceSource { Pressure, Tester };

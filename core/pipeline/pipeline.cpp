@@ -21,6 +21,11 @@ void Pipeline::finish() {
   if (auto e = detector_.finish()) handle(std::move(*e));
 }
 
+void Pipeline::finish_file() {
+  if (auto s = builder_.flush()) feed(*s);
+  if (auto e = detector_.finish_file()) handle(std::move(*e));
+}
+
 void Pipeline::abort(const std::string& reason) {
   if (auto e = detector_.abort(reason)) handle(std::move(*e));
 }

@@ -34,7 +34,10 @@ class Pipeline {
   Pipeline(const Calibration& c, const PipelineOptions& o, const Model* model);
   void feed(const can::LoggedFrame& f);
   void feed(const Sample& s);
+  /// End of a log: a running event is aborted (end_of_data).
   void finish();
+  /// End of an event file: a running event is finished (end_of_file).
+  void finish_file();
   /// Ends a running event, flagged aborted with this end reason.
   void abort(const std::string& reason);
   void arm() { detector_.arm(); }
