@@ -1,13 +1,18 @@
-// The blinded-injection referee of `brakefit gap` (issue 5):
+// The blinded-injection referee of `brakefit gap` (issues 5 and 10):
 //   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
-// For each condition (model vs measurement on the roller and on flat ground, roller vs road):
-// 1. calibrates the acceptance gates on null sets (seeds 1 000 000 + i, disjoint from the
-//    referee's), 2. runs the trials: each draws an effect or none and a magnitude, simulates three
-//    runs (three pedal ramps), hides the label, diagnoses and scores. Prints the confusion matrix,
-//    the false-positive rate on none, the magnitude errors and the gap left after correction
-//    relative to the noise floor; a JSON document (brakefit.gap_referee/1) last. The trials of a
-//    condition run on --threads threads (results do not depend on it: each trial has its seed).
+//               [--generators A,B] [--crossed 1]
+// Two generators make the runs: A, the project's simulator (candump logs), and B, the second
+// physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
+// tester's event-CSV export). For each condition (model vs measurement on the roller and on flat
+// ground; roller vs road, A only): 1. calibrates the acceptance gates on null sets of each
+// generator (seeds 1 000 000 + i, disjoint from the trials'), 2. runs the trials of each
+// generator with its own gates (straight) and with the other's (crossed): each draws an effect
+// or none and a magnitude, simulates three runs, hides the label, diagnoses and scores. Prints
+// the confusion matrix, the false-positive rate on none, the share of null sets said exactly
+// ["none"], the magnitude errors and the gap left after correction relative to the noise floor;
+// a JSON document (brakefit.gap_referee/1) last. Trials run on --threads threads (results do not
+// depend on it: each trial has its seed).
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -66,8 +71,10 @@ struct Settings {
   std::uint64_t seed = 1;
 };
 
-nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
-  const std::string cname = gap::to_string(c);
+/// The gates calibrated on null sets of one generator (seeds 1 000 000+, disjoint from the
+/// trials').
+sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Generator gen) {
+  const std::string cname = fmt::format("{} {}", gap::to_string(c), sim::to_string(gen));
   std::cerr << fmt::format("[{}] calibrating the gates on {} null sets...\n", cname, st.calib);
   sim::GateCalibration gates;
   {
@@ -76,7 +83,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
         st.calib,
         [&](int i) {
           return sim::calibrate_gates(c, 1, 1'000'000 + static_cast<std::uint64_t>(i),
-                                      gap::Options{});
+                                      gap::Options{}, gen);
         },
         cname + " null sets");
     for (const auto& g : per) {
@@ -91,13 +98,22 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
       cname, quantile(gates.null_best_gain, 0.5), quantile(gates.null_best_gain, 1.0),
       quantile(gates.null_best_delta_bic, 0.0), gates.options.gate_gain, gates.options.bic_margin,
       gap::calibrated_options(c).gate_gain, gap::calibrated_options(c).bic_margin);
+  return gates;
+}
 
+/// Trials from trial_gen diagnosed with gates calibrated on gate_gen (crossed when they differ).
+nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::Generator trial_gen,
+                                     const sim::GateCalibration& gates, sim::Generator gate_gen) {
+  const std::string cname =
+      fmt::format("{}, trials {}, gates {}{}", gap::to_string(c), sim::to_string(trial_gen),
+                  sim::to_string(gate_gen), trial_gen == gate_gen ? "" : " (crossed)");
   const int trials = c == gap::Condition::Roller ? st.trials : st.trials_other;
   // Draws first (one generator, in order), then the trials in parallel.
   Rng rng(st.seed + 100 * static_cast<std::uint64_t>(c));
   std::vector<sim::Injection> draws;
   draws.reserve(static_cast<std::size_t>(std::max(0, trials)));
-  for (int t = 0; t < trials; ++t) draws.push_back(sim::draw_injection(rng, st.null_share, c));
+  for (int t = 0; t < trials; ++t)
+    draws.push_back(sim::draw_injection(rng, st.null_share, c, trial_gen));
   const auto results = parallel_map<sim::TrialResult>(
       trials,
       [&](int t) {
@@ -109,11 +125,12 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
       cname + " trials");
 
   std::vector<std::string> labels{"none"};
-  for (const auto& e : sim::referee_effects(c)) labels.push_back(e);
+  for (const auto& e : sim::referee_effects(c, trial_gen)) labels.push_back(e);
   std::map<std::string, std::map<std::string, int>> confusion;
   std::map<std::string, std::vector<double>> mag_err, after_by_effect;
   std::vector<double> after_over_noise;
-  int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0;
+  int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0,
+      none_exact = 0;
   for (const auto& r : results) {
     const auto& inj = r.truth;
     const std::string said = r.verdict.empty() ? "?" : r.verdict.front();
@@ -121,6 +138,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
     if (inj.effect == "none") {
       ++n_none;
       if (said != "none" && said != "unexplained") ++fp_none;
+      if (r.exact()) ++none_exact;
       continue;
     }
     ++n_effects;
@@ -147,7 +165,10 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
     std::cout << (other.empty() ? "" : fmt::format(" (+{})", fmt::join(other, ", "))) << " |\n";
   }
   nlohmann::ordered_json j;
-  j["condition"] = cname;
+  j["condition"] = gap::to_string(c);
+  j["trial_generator"] = sim::to_string(trial_gen);
+  j["gate_generator"] = sim::to_string(gate_gen);
+  j["crossed"] = trial_gen != gate_gen;
   j["trials"] = trials;
   j["null_trials"] = n_none;
   j["gate_gain"] = gates.options.gate_gain;
@@ -157,12 +178,13 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
   j["accuracy_effects"] = n_effects ? static_cast<double>(correct_effects) / n_effects : NAN;
   j["accuracy_effects_exact"] = n_effects ? static_cast<double>(exact_effects) / n_effects : NAN;
   j["false_positive_rate_none"] = n_none ? static_cast<double>(fp_none) / n_none : NAN;
+  j["null_exactly_none"] = n_none ? static_cast<double>(none_exact) / n_none : NAN;
   std::cout << fmt::format(
       "\neffects correct: {}/{} ({:.1f} %; first verdict exactly the injected effect: {:.1f} %), "
-      "false positives on none: {}/{} ({:.1f} %)\n",
+      "false positives on none: {}/{} ({:.1f} %), null sets exactly [\"none\"]: {}/{}\n",
       correct_effects, n_effects, 100.0 * correct_effects / std::max(1, n_effects),
       100.0 * exact_effects / std::max(1, n_effects), fp_none, n_none,
-      100.0 * fp_none / std::max(1, n_none));
+      100.0 * fp_none / std::max(1, n_none), none_exact, n_none);
   for (const auto& [e, v] : mag_err) {
     const auto within = std::count_if(v.begin(), v.end(), [](double x) { return x <= 0.25; });
     const double share = static_cast<double>(within) / static_cast<double>(v.size());
@@ -190,6 +212,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
           sim::Injection inj;
           inj.effect = "misspecified";
           inj.condition = c;
+          inj.generator = trial_gen;
           return sim::run_trial(inj, 500'000 + static_cast<std::uint64_t>(t), gates.options);
         },
         "misspecified");
@@ -203,8 +226,9 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
     j["misspecified_none_or_unexplained"] = static_cast<double>(ok) / st.misspecified;
     j["misspecified_said"] = said;
     std::cout << fmt::format(
-        "misspecified tyre (Burckhardt): none/unexplained in {}/{}; first verdicts:", ok,
-        st.misspecified);
+        "misspecified tyre (A: Burckhardt, B: brush model): none/unexplained in {}/{}; first "
+        "verdicts:",
+        ok, st.misspecified);
     for (const auto& [k, v] : said) std::cout << fmt::format(" {} {}", k, v);
     std::cout << "\n";
   }
@@ -213,7 +237,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st) {
 
 int run(int argc, char** argv) {
   Settings st;
-  std::string which = "all";
+  std::string which = "all", generators = "A,B";
+  bool crossed = true;
   g_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i];
@@ -234,6 +259,10 @@ int run(int argc, char** argv) {
       g_threads = std::atoi(v);
     else if (k == "--condition")
       which = v;
+    else if (k == "--generators")
+      generators = v;
+    else if (k == "--crossed")
+      crossed = std::string(v) != "0" && std::string(v) != "no";
     else {
       std::cerr << "gap_referee: unknown option " << k << "\n";
       return 64;
@@ -247,7 +276,19 @@ int run(int argc, char** argv) {
   for (auto c : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad}) {
     if (which != "all" && which != gap::to_string(c)) continue;
     any = true;
-    j["conditions"].push_back(run_condition(c, st));
+    // Generator B makes model-vs-measurement runs only; roller vs road stays A's.
+    std::vector<sim::Generator> gens;
+    for (auto g : {sim::Generator::A, sim::Generator::B})
+      if (generators.find(sim::to_string(g)) != std::string::npos &&
+          (g == sim::Generator::A || c != gap::Condition::RollerToRoad))
+        gens.push_back(g);
+    std::map<sim::Generator, sim::GateCalibration> gates;
+    for (auto g : gens) gates[g] = calibrate(c, st, g);
+    // Straight (trials and gates of one generator), then crossed (gates of the other).
+    for (auto trial : gens)
+      for (auto gate : gens)
+        if (gate == trial || crossed)
+          j["conditions"].push_back(run_condition(c, st, trial, gates[gate], gate));
   }
   if (!any) {
     std::cerr << "gap_referee: --condition must be roller, ground, roller_vs_road or all\n";

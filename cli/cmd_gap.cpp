@@ -34,6 +34,7 @@ nlohmann::ordered_json params_json(const gap::Fit& f, const std::vector<gap::Eff
 }
 
 nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::Run>& runs,
+                                   const std::vector<LeftOut>& left_out,
                                    const std::string& model_hash, const std::string& mode,
                                    gap::Condition condition, const gap::Options& gates) {
   nlohmann::ordered_json j;
@@ -46,6 +47,7 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
   j["gates"] = {{"gain", num(gates.gate_gain)}, {"bic_margin", num(gates.bic_margin)}};
   j["runs"] = nlohmann::ordered_json::array();
   for (const auto& run : runs) j["runs"].push_back(run.name);
+  j["left_out"] = left_out_json(left_out);
   j["verdict"] = r.verdict;
   j["effects"] = nlohmann::ordered_json::array();
   for (const auto& e : r.effects) {
@@ -66,11 +68,21 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
     j["where"].push_back(
         {{"region", w.region}, {"rms_residual_n", num(w.rms_residual_n)}, {"share", num(w.share)}});
   j["noise_n"] = num(r.noise_n);
+  // The floor's two parts: the force channel, and the slip noise through the local slope.
+  j["floor"] = {{"total_n", num(r.floor.total_n())},
+                {"force_n", num(r.floor.force_n)},
+                {"slip_n", num(r.floor.slip_n)},
+                {"slip_sd_ratio", num(r.floor.slip_sd_ratio)},
+                {"v_ref_sd_mps", num(r.floor.v_ref_sd_mps)},
+                {"v_wheel_sd_mps", num(r.floor.v_wheel_sd_mps)},
+                {"v_ref_step_mps", num(r.floor.v_ref_step_mps)},
+                {"v_wheel_step_mps", num(r.floor.v_wheel_step_mps)},
+                {"force_step_n", num(r.floor.force_step_n)}};
   j["gap_before_rmse_n"] = num(r.gap_before_rmse_n);
   j["gap_after_rmse_n"] = num(r.gap_after_rmse_n);
   j["fraction_explained"] =
       num(r.gap_before_rmse_n > 0 ? 1.0 - r.gap_after_rmse_n / r.gap_before_rmse_n : 0.0);
-  j["parameters_before"] = params_json(r.before, {});
+  j["parameters_before"] = params_json(r.before, r.baseline_effects);
   j["parameters_after"] = params_json(r.after, r.accepted);
   j["notes"] = r.notes;
   return j;
@@ -90,7 +102,7 @@ void write_report(const std::string& dir, const gap::Report& r, const std::vecto
       "Measured runs, baseline and corrected model", "slip [%]", "brake force [N]", {}, 800, 500};
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const auto& run = runs[k];
-    const auto before = gap::predict(run, r.before.params, {});
+    const auto before = gap::predict(run, r.before.params, r.baseline_effects);
     const auto after = gap::predict(run, r.after.params, r.accepted);
     plot::Series s{run.name, {}, {}, true, plot::series_color(k)};
     plot::Series m{run.name + " measured", {}, {}, true, plot::series_color(k)};
@@ -142,7 +154,7 @@ tr.ok{{background:#e6f4e6}}</style></head><body>
 <p>Runs: {}</p>
 <h2>Verdict: {}</h2>
 <p>Held-out gap (leave one run out): <b>{:.1f} N</b> before, <b>{:.1f} N</b> after ({:.0f} % explained);
-force noise {:.1f} N. Condition <b>{}</b>: an effect is accepted when its held-out gain is at
+noise floor {:.1f} N (force channel {:.1f} N, slip noise through the slope {:.1f} N). Condition <b>{}</b>: an effect is accepted when its held-out gain is at
 least {:.3f} and its BIC drops by at least {:.1f} (gates calibrated on null data of this
 condition).</p>
 <ul>{}</ul>
@@ -164,8 +176,9 @@ condition).</p>
       plot::xml_escape(fmt::format("{}", fmt::join(r.verdict, ", "))), r.gap_before_rmse_n,
       r.gap_after_rmse_n,
       r.gap_before_rmse_n > 0 ? 100 * (1 - r.gap_after_rmse_n / r.gap_before_rmse_n) : 0.0,
-      r.noise_n, doc["condition"].get<std::string>(), doc["gates"]["gain"].get<double>(),
-      doc["gates"]["bic_margin"].get<double>(), notes, rows, where, kVersion);
+      r.noise_n, r.floor.force_n, r.floor.slip_n, doc["condition"].get<std::string>(),
+      doc["gates"]["gain"].get<double>(), doc["gates"]["bic_margin"].get<double>(), notes, rows,
+      where, kVersion);
   write_file(dir + "/index.html", html);
 }
 
@@ -213,18 +226,24 @@ void add_gap_command(CLI::App& app) {
     if (!transfer && o->files.empty())
       throw ExitError(kExitConfig, "gap: no runs given (RUNS, or --roller and --road)");
     Curve pooled;
+    std::vector<LeftOut> left_out;
     auto load = [&](const std::vector<std::string>& files, bool pool) {
       std::vector<gap::Run> runs;
       for (const auto& f : files) {
         const Run run = process_run(f, o->run, nullptr);
         for (const auto& e : run.events) {
           if (!e.event.fittable()) {
-            spdlog::warn("{}: event {} skipped ({})", f, e.event.event_id, e.event.end_reason);
+            leave_out(left_out, run, e.event, flagged_reason(e.event));
             continue;
           }
           const std::string name =
               fmt::format("{}#{}", std::filesystem::path(f).stem().string(), e.event.event_id);
-          runs.push_back(gap::condition(name, e.event, run.calibration, co));
+          try {
+            runs.push_back(gap::condition(name, e.event, run.calibration, co));
+          } catch (const InputError& err) {
+            leave_out(left_out, run, e.event, err.what());
+            continue;
+          }
           if (!pool) continue;
           pooled.slip_ratio.insert(pooled.slip_ratio.end(), e.curve.slip_ratio.begin(),
                                    e.curve.slip_ratio.end());
@@ -263,8 +282,8 @@ void add_gap_command(CLI::App& app) {
         transfer ? gap::diagnose_transfer(roller_runs, runs, seed.params, gap_options)
                  : gap::diagnose(runs, seed.params, gap_options);
     const auto doc =
-        report_json(rep, runs, model.hash, transfer ? "roller_vs_road" : "model_vs_measurement",
-                    condition, gap_options);
+        report_json(rep, runs, left_out, model.hash,
+                    transfer ? "roller_vs_road" : "model_vs_measurement", condition, gap_options);
     if (!o->report.empty()) {
       write_report(o->report, rep, runs, doc);
       spdlog::info("report written to {}/index.html", o->report);
@@ -275,10 +294,11 @@ void add_gap_command(CLI::App& app) {
     }
     std::cout << fmt::format("verdict: {}\n", fmt::join(rep.verdict, ", "));
     std::cout << fmt::format(
-        "held-out gap {:.1f} N -> {:.1f} N ({:.0f} % explained), force noise {:.1f} N\n",
+        "held-out gap {:.1f} N -> {:.1f} N ({:.0f} % explained), noise floor {:.1f} N (force "
+        "{:.1f} N, slip noise {:.2g} through the slope {:.1f} N)\n",
         rep.gap_before_rmse_n, rep.gap_after_rmse_n,
         rep.gap_before_rmse_n > 0 ? 100 * (1 - rep.gap_after_rmse_n / rep.gap_before_rmse_n) : 0.0,
-        rep.noise_n);
+        rep.noise_n, rep.floor.force_n, rep.floor.slip_sd_ratio, rep.floor.slip_n);
     for (const auto& e : rep.effects) {
       std::string ps;
       for (const auto& [k, v] : e.params) ps += fmt::format("{} {:.4g} ", k, v);

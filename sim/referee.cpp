@@ -1,10 +1,14 @@
 #include "sim/referee.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
 #include "core/identify.hpp"
+#include "core/pipeline/event_csv.hpp"
 #include "core/pipeline/pipeline.hpp"
+#include "sim/second/generator.hpp"
 #include "sim/simulator.hpp"
 
 namespace brakefit::sim {
@@ -73,21 +77,42 @@ Scenario referee_null(can::BenchKind bench) {
   return s;
 }
 
-const std::vector<std::string>& referee_effects(gap::Condition c) {
-  static const auto names = [] {
-    std::vector<std::vector<std::string>> n(3);
-    for (auto cond : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad})
-      for (const auto& r : ranges(cond)) n[static_cast<std::size_t>(cond)].push_back(r.effect);
-    return n;
-  }();
-  return names[static_cast<std::size_t>(c)];
+const char* to_string(Generator g) {
+  return g == Generator::A ? "A" : "B";
 }
 
-Injection draw_injection(Rng& rng, double p_none, gap::Condition c) {
+namespace {
+
+/// Generator B has no cradle (its roller bench holds the wheel on one roller).
+std::vector<Range> ranges(gap::Condition c, Generator g) {
+  std::vector<Range> out;
+  for (const auto& r : ranges(c))
+    if (g == Generator::A || std::string(r.effect) != "cradle_cap") out.push_back(r);
+  return out;
+}
+
+}  // namespace
+
+const std::vector<std::string>& referee_effects(gap::Condition c, Generator g) {
+  static const auto names = [] {
+    std::vector<std::vector<std::string>> n(6);
+    for (auto gen : {Generator::A, Generator::B})
+      for (auto cond :
+           {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad})
+        for (const auto& r : ranges(cond, gen))
+          n[static_cast<std::size_t>(cond) + 3 * static_cast<std::size_t>(gen)].push_back(r.effect);
+    return n;
+  }();
+  return names[static_cast<std::size_t>(c) + 3 * static_cast<std::size_t>(g)];
+}
+
+Injection draw_injection(Rng& rng, double p_none, gap::Condition c, Generator g) {
   Injection inj;
   inj.condition = c;
+  inj.generator = g;
   if (rng.uniform() < p_none) return inj;
-  const auto& r = ranges(c)[rng.index(ranges(c).size())];
+  const auto rs = ranges(c, g);
+  const auto& r = rs[rng.index(rs.size())];
   inj.effect = r.effect;
   inj.magnitude = rng.uniform(r.lo, r.hi);
   if (r.either_sign && rng.uniform() < 0.5) inj.magnitude = -inj.magnitude;
@@ -194,10 +219,46 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   return t;
 }
 
+}  // namespace
+
+std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed) {
+  const auto bench =
+      inj.condition == gap::Condition::Ground ? can::BenchKind::Ground : can::BenchKind::Roller;
+  const sim2::SetDraw set = sim2::draw_set(bench, inj.effect, inj.magnitude, seed);
+  inj.magnitude = set.magnitude;
+  std::vector<gap::Run> out;
+  for (std::size_t k = 0; k < set.runs.size(); ++k) {
+    const std::string name = fmt::format("b{}", k);
+    const auto csv = pipeline::parse_event_csv(sim2::simulate_event_csv(set.runs[k]), name);
+    pipeline::PipelineOptions o;
+    o.fit = false;
+    pipeline::Pipeline p(csv.calibration, o, nullptr);
+    for (const auto& smp : csv.samples) p.feed(smp);
+    p.finish_file();
+    for (const auto& e : p.events()) {
+      if (!e.event.fittable()) continue;
+      try {
+        out.push_back(gap::condition(name, e.event, csv.calibration, {}));
+      } catch (const InputError&) {
+        // too few samples: the diagnosis works with the others
+      }
+    }
+  }
+  return out;
+}
+
+namespace {
+
 /// Blinded: the diagnosis sees the runs only (start values from a least-squares fit of their
 /// pooled points, as `brakefit gap` does without a model).
-gap::Report diagnose_blind(gap::Condition c, const Injection& inj, std::uint64_t seed,
+gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
                            const gap::Options& o) {
+  if (inj.generator == Generator::B) {
+    if (c == gap::Condition::RollerToRoad)
+      throw InputError("generator B makes model-vs-measurement runs (roller, ground) only");
+    const auto runs = generator_b_runs(inj, seed);
+    return gap::diagnose(runs, pooled_start(runs), o);
+  }
   if (c != gap::Condition::RollerToRoad) {
     const auto runs =
         simulate_runs(inject(referee_null(c == gap::Condition::Ground ? can::BenchKind::Ground
@@ -218,8 +279,10 @@ gap::Report diagnose_blind(gap::Condition c, const Injection& inj, std::uint64_t
 
 }  // namespace
 
-TrialResult run_trial(const Injection& inj, std::uint64_t seed, const gap::Options& o) {
-  return score(inj, diagnose_blind(inj.condition, inj, seed, o));
+TrialResult run_trial(const Injection& inj_in, std::uint64_t seed, const gap::Options& o) {
+  Injection inj = inj_in;
+  const gap::Report rep = diagnose_blind(inj.condition, inj, seed, o);
+  return score(inj, rep);
 }
 
 TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t seed,
@@ -229,7 +292,7 @@ TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t 
 }
 
 GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
-                                const gap::Options& start) {
+                                const gap::Options& start, Generator gen) {
   GateCalibration g;
   g.options = start;
   gap::Options probe = start;
@@ -237,6 +300,7 @@ GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
   for (int i = 0; i < n; ++i) {
     Injection none;
     none.condition = c;
+    none.generator = gen;
     const gap::Report rep = diagnose_blind(c, none, seed0 + static_cast<std::uint64_t>(i), probe);
     double best_gain = -1e9, best_bic = 1e9;
     for (const auto& e : rep.effects) {

@@ -18,15 +18,27 @@ namespace brakefit::sim {
 /// below the force noise (0.005 kg m^2), pressure noise 0.05 bar, ideal encoders.
 Scenario referee_null(can::BenchKind bench);
 
+/// Which physics makes the runs: A, the project's simulator (sim/simulator.*, candump logs), or
+/// B, the second physics written apart (sim/second: .tir tyres, a brush family, its own
+/// integrator, a tester's event-CSV export read back through the event CSV parser).
+enum class Generator { A, B };
+const char* to_string(Generator g);
+
 struct Injection {
   std::string effect = "none";  ///< gap effect name, "none" or "misspecified"
   double magnitude = 0.0;       ///< in the diagnosis parameter's unit (sigma_m, p0_bar, ...)
   gap::Condition condition = gap::Condition::Roller;
+  Generator generator = Generator::A;  ///< B: roller and ground conditions only
 };
 
 /// The effects the referee draws in a condition (besides none) and their magnitude ranges.
-const std::vector<std::string>& referee_effects(gap::Condition c);
-Injection draw_injection(Rng& rng, double p_none, gap::Condition c = gap::Condition::Roller);
+const std::vector<std::string>& referee_effects(gap::Condition c, Generator g = Generator::A);
+Injection draw_injection(Rng& rng, double p_none, gap::Condition c = gap::Condition::Roller,
+                         Generator g = Generator::A);
+/// Generator B: three runs (roller: three pedal ramps; ground: 30, 50, 70 km/h) exported as event
+/// CSVs, read back through parse_event_csv and the pipeline, conditioned. The injection's
+/// magnitude is set to the drawn truth where the vehicle decides it (load transfer).
+std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed);
 /// The scenario with the injection switched on (everything else as in base). In the transfer
 /// condition roller_friction goes to the roller scenario, the others to the road.
 Scenario inject(Scenario base, const Injection& inj);
@@ -62,7 +74,7 @@ struct GateCalibration {
 /// Diagnoses n null sets of a condition (seeds seed0, seed0+1, ...) and sets the gates above what
 /// they show: gain gate = max(start gate, 1.5 x the largest best-candidate gain), BIC likewise.
 GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
-                                const gap::Options& start);
+                                const gap::Options& start, Generator g = Generator::A);
 /// The gates from the null scores in g (options hold the floors): gain gate = max(floor, 1.5 x
 /// the largest null gain), BIC margin = max(floor, 1.5 x the largest null BIC drop).
 void set_gates(GateCalibration& g);

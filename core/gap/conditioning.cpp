@@ -53,6 +53,94 @@ double interp(const std::vector<double>& t, const std::vector<double>& x, double
   return x[j - 1] + u * (x[j] - x[j - 1]);
 }
 
+double smoothing_noise_gain(int half_window) {
+  // The centre weights of the quadratic Savitzky-Golay filter: sqrt(sum w^2) = sqrt(w0).
+  if (half_window <= 0) return 1.0;
+  const double m = half_window;
+  return std::sqrt(3 * (3 * m * m + 3 * m - 1) / ((2 * m - 1) * (2 * m + 1) * (2 * m + 3)));
+}
+
+std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& x,
+                                int half_window) {
+  // Least-squares slope over 2 hw + 1 samples, the window shifted (not shrunk) at the ends: a
+  // shrunken window differentiates the raw noise at the last samples.
+  const auto n = static_cast<long>(x.size());
+  const long w = std::min<long>(half_window, (n - 1) / 2);
+  std::vector<double> d(x.size(), 0.0);
+  for (long i = 0; i < n; ++i) {
+    const long a = std::clamp(i - w, 0L, std::max(0L, n - 1 - 2 * w)),
+               b = std::min(n - 1, a + 2 * w);
+    double st = 0, sx = 0, stt = 0, stx = 0, m = 0;
+    for (long k = a; k <= b; ++k) {
+      const double tk = t[static_cast<std::size_t>(k)] - t[static_cast<std::size_t>(i)];
+      st += tk;
+      sx += x[static_cast<std::size_t>(k)];
+      stt += tk * tk;
+      stx += tk * x[static_cast<std::size_t>(k)];
+      ++m;
+    }
+    const double den = m * stt - st * st;
+    d[static_cast<std::size_t>(i)] = den > 0 ? (m * stx - st * sx) / den : 0.0;
+  }
+  return d;
+}
+
+std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
+                               double step) {
+  // Anchors: where the level changes between samples i-1 and i, the signal crossed the middle of
+  // the two levels, half-way in time.
+  std::vector<double> at, val;
+  for (std::size_t i = 1; i < x.size(); ++i)
+    if (x[i] != x[i - 1]) {
+      at.push_back(0.5 * (t[i] + t[i - 1]));
+      val.push_back(0.5 * (x[i] + x[i - 1]));
+    }
+  if (at.size() < 2) return x;
+  const std::size_t n = at.size();
+  const double slope0 = (val[1] - val[0]) / std::max(at[1] - at[0], 1e-9);
+  const double slope1 = (val[n - 1] - val[n - 2]) / std::max(at[n - 1] - at[n - 2], 1e-9);
+  std::vector<double> y(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    double v = 0;
+    if (t[i] <= at.front())
+      v = val.front() + slope0 * (t[i] - at.front());  // extrapolated along the first anchors
+    else if (t[i] >= at.back())
+      v = val.back() + slope1 * (t[i] - at.back());
+    else
+      v = interp(at, val, t[i]);
+    // The signal lies within half a step of the level it was quantised to.
+    y[i] = std::clamp(v, x[i] - 0.5 * step, x[i] + 0.5 * step);
+  }
+  return y;
+}
+
+ChannelNoise channel_noise(const std::vector<double>& x) {
+  ChannelNoise out;
+  if (x.size() < 3) return out;
+  std::vector<double> d2;
+  for (std::size_t i = 1; i + 1 < x.size(); ++i)
+    d2.push_back(std::abs(x[i + 1] - 2 * x[i] + x[i - 1]));
+  std::nth_element(d2.begin(), d2.begin() + static_cast<long>(d2.size() / 2), d2.end());
+  const double random_sd = d2[d2.size() / 2] / 0.6745 / std::sqrt(6.0);
+  // Quantisation: the smallest non-zero step, if (nearly) every non-zero step is a whole
+  // multiple of it.
+  double scale = 0;
+  for (double v : x) scale = std::max(scale, std::abs(v));
+  std::vector<double> steps;
+  for (std::size_t i = 1; i < x.size(); ++i)
+    if (const double d = std::abs(x[i] - x[i - 1]); d > 1e-12 * std::max(scale, 1.0))
+      steps.push_back(d);
+  if (!steps.empty()) {
+    const double q = *std::min_element(steps.begin(), steps.end());
+    std::size_t whole = 0;
+    for (double d : steps)
+      if (std::abs(d / q - std::round(d / q)) < 0.1) ++whole;
+    if (static_cast<double>(whole) >= 0.9 * static_cast<double>(steps.size())) out.step = q;
+  }
+  out.sd = std::max(random_sd, out.step / std::sqrt(12.0));
+  return out;
+}
+
 namespace {
 
 /// Least-squares line through the samples of the first window_s of a run.
@@ -90,6 +178,9 @@ constexpr double kLockSlip = 0.9;
 /// A lock-up runaway starts past the linear region: jumps below this slip are noise. (2 %: a
 /// wheel capped by the cradle below its peak runs away from there.)
 constexpr double kRunawayMinSlip = 0.02;
+/// The share of a quantised channel's step/sqrt(12) left after rebuilding it from its
+/// transitions (its floor).
+constexpr double kDequantisedShare = 0.5;
 
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o) {
@@ -136,17 +227,53 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   }
   if (full.t_s.size() < 20)
     throw InputError(fmt::format("{}: too few samples for a diagnosis", name));
-  // Noise of the force channel: robust scale of second differences (the signal is smooth at
-  // 1 kHz; first differences would count a 250 bar/s ramp, 16 N per sample, as noise).
-  std::vector<double> df;
-  for (std::size_t i = 1; i + 1 < full.force_n.size(); ++i)
-    df.push_back(std::abs(full.force_n[i + 1] - 2 * full.force_n[i] + full.force_n[i - 1]));
-  std::nth_element(df.begin(), df.begin() + static_cast<long>(df.size() / 2), df.end());
-  full.noise_n = df[df.size() / 2] / 0.6745 / std::sqrt(6.0);
+  // A first-order filter the tester declared on its pressure channel is undone: p = p_f + tau
+  // dp_f/dt (the derivative of the smoothed pressure).
+  if (c.pressure_filter_s > 0 && o.force == pipeline::ForceSource::Pressure) {
+    const auto rate = local_slope(full.t_s, pressure, o.smooth_half_window);
+    for (std::size_t i = 0; i < pressure.size(); ++i) {
+      pressure[i] += c.pressure_filter_s * rate[i];
+      full.force_n[i] = c.brake_gain_n_per_bar * pressure[i];
+    }
+  }
+  // A quantised speed channel (a tester's export: 0.5-3 mm/s steps) is a staircase whose error
+  // is not white where the speed moves slowly: it is rebuilt from its transitions (where the
+  // staircase steps, the speed crossed the middle of the two levels), as an encoder's speed is
+  // from its edge times.
+  ChannelNoise ref_noise = channel_noise(full.v_ref_mps), wheel_noise = channel_noise(v_wheel);
+  // The two speeds come from one export at one resolution: a reference that never changed level
+  // (a roller held at speed) shows no step of its own but has the wheel's.
+  if (ref_noise.step == 0 && wheel_noise.step > 0) {
+    const auto [lo, hi] = std::minmax_element(full.v_ref_mps.begin(), full.v_ref_mps.end());
+    if (*hi - *lo < 0.5 * wheel_noise.step) {
+      ref_noise.step = wheel_noise.step;
+      ref_noise.sd = std::max(ref_noise.sd, ref_noise.step / std::sqrt(12.0));
+      full.ref_bias_bound = 0.5 * ref_noise.step / std::max(*lo, 1e-6);
+    }
+  }
+  for (auto [v, cn] : {std::pair{&full.v_ref_mps, &ref_noise}, std::pair{&v_wheel, &wheel_noise}})
+    if (cn->step > 0) {
+      *v = dequantise(full.t_s, *v, cn->step);
+      // What is left: the random part of the rebuilt channel, and at least a share of the
+      // staircase's step/sqrt(12) (the rebuilt signal is exact at the anchors only).
+      cn->sd = std::max(channel_noise(*v).sd, kDequantisedShare * cn->step / std::sqrt(12.0));
+    }
+  // Noise of each channel: robust scale of second differences (the signal is smooth at 1 kHz;
+  // first differences would count a 250 bar/s ramp, 16 N per sample, as noise), and at least
+  // the quantisation's step/sqrt(12) (a slowly moving quantised signal has mostly zero
+  // differences).
+  const ChannelNoise force_noise = channel_noise(full.force_n);
+  full.noise_n = force_noise.sd;
+  full.force_step_n = force_noise.step;
+  full.v_ref_sd_mps = ref_noise.sd;
+  full.v_ref_step_mps = ref_noise.step;
+  full.v_wheel_sd_mps = wheel_noise.sd;
+  full.v_wheel_step_mps = wheel_noise.step;
   // Channel alignment: an encoder speed is the mean over the interval since the previous edge
   // time (one frame), so it describes the moment half a frame before its stamp, while the
   // pressure is sampled at the stamp. The speeds are moved forward by half the median interval.
-  {
+  // (Speeds taken at the stamp, speed_timing = "instant", are not moved.)
+  if (c.speed_timing == "frame_mean") {
     std::vector<double> dts;
     for (std::size_t i = 1; i < full.t_s.size(); ++i) dts.push_back(full.t_s[i] - full.t_s[i - 1]);
     std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
@@ -165,8 +292,17 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   const auto vr = smooth(full.v_ref_mps, o.smooth_half_window),
              vw = smooth(v_wheel, o.smooth_half_window);
   full.v_ref_mps = vr;
-  for (std::size_t i = 0; i < vr.size(); ++i)
+  // The slip's noise after smoothing (first-order propagation of both speeds' noise through
+  // Eq. 1, times the smoother's white-noise gain).
+  const double gain = smoothing_noise_gain(o.smooth_half_window);
+  for (std::size_t i = 0; i < vr.size(); ++i) {
     full.slip.push_back(std::clamp(1.0 - vw[i] / vr[i], -1.0, 1.0));  // below 0: a slip offset
+    // (A constant reference's quantisation is a bias of the run, levelled across runs in the
+    // diagnosis, not noise.)
+    const double ref_sd = full.ref_bias_bound > 0 ? 0.0 : full.v_ref_sd_mps;
+    full.slip_sd.push_back(
+        gain * std::hypot(full.v_wheel_sd_mps / vr[i], vw[i] * ref_sd / (vr[i] * vr[i])));
+  }
   full.wheel_accel_mps2 = derivative(full.t_s, vw);
   auto dref = derivative(full.t_s, vr);
   for (double& d : dref) d = -d;
@@ -191,6 +327,12 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.wheel_radius_m = full.wheel_radius_m;
   r.brake_gain_n_per_bar = full.brake_gain_n_per_bar;
   r.noise_n = full.noise_n;
+  r.v_ref_sd_mps = full.v_ref_sd_mps;
+  r.v_wheel_sd_mps = full.v_wheel_sd_mps;
+  r.v_ref_step_mps = full.v_ref_step_mps;
+  r.v_wheel_step_mps = full.v_wheel_step_mps;
+  r.force_step_n = full.force_step_n;
+  r.ref_bias_bound = full.ref_bias_bound;
   r.initial_slip_rate_per_s = full.initial_slip_rate_per_s;
   r.initial_force_n = full.initial_force_n;
   r.runaway = full.runaway;
@@ -198,6 +340,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   for (std::size_t i : idx) {
     r.t_s.push_back(full.t_s[i]);
     r.slip.push_back(full.slip[i]);
+    r.slip_sd.push_back(full.slip_sd[i]);
     r.v_ref_mps.push_back(full.v_ref_mps[i]);
     r.force_n.push_back(full.force_n[i]);
     r.wheel_accel_mps2.push_back(full.wheel_accel_mps2[i]);
@@ -205,6 +348,59 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     r.pressure_rate_bar_per_s.push_back(full.pressure_rate_bar_per_s[i]);
   }
   return r;
+}
+
+std::string level_reference_biases(std::vector<Run>& runs) {
+  // The slip at zero force is the same in every run (a slip offset is the runs' common effect):
+  // a line of common slope with an intercept per run through the linear region (5-30 % of the
+  // largest force); each run's intercept less the mean intercept, within its bound, is its
+  // reference bias.
+  std::size_t biased = 0;
+  for (const Run& r : runs) biased += r.ref_bias_bound > 0;
+  if (biased == 0 || runs.size() < 2) return {};
+  double peak = 0;
+  for (const Run& r : runs)
+    for (double f : r.force_n) peak = std::max(peak, f);
+  std::vector<double> mf(runs.size()), ms(runs.size());
+  double sff = 0, sfs = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const Run& r = runs[k];
+    double n = 0;
+    for (std::size_t i = 0; i < r.slip.size(); ++i)
+      if (r.force_n[i] >= 0.05 * peak && r.force_n[i] <= 0.3 * peak) {
+        mf[k] += r.force_n[i];
+        ms[k] += r.slip[i];
+        ++n;
+      }
+    if (n < 5) return {};
+    mf[k] /= n;
+    ms[k] /= n;
+    for (std::size_t i = 0; i < r.slip.size(); ++i)
+      if (r.force_n[i] >= 0.05 * peak && r.force_n[i] <= 0.3 * peak) {
+        sff += (r.force_n[i] - mf[k]) * (r.force_n[i] - mf[k]);
+        sfs += (r.force_n[i] - mf[k]) * (r.slip[i] - ms[k]);
+      }
+  }
+  if (!(sff > 0)) return {};
+  const double slope = sfs / sff;  // slip per newton
+  std::vector<double> icpt(runs.size());
+  double mean = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) mean += icpt[k] = ms[k] - slope * mf[k];
+  mean /= static_cast<double>(runs.size());
+  double largest = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    Run& r = runs[k];
+    if (r.ref_bias_bound <= 0) continue;
+    const double b = std::clamp(icpt[k] - mean, -r.ref_bias_bound, r.ref_bias_bound);
+    for (double& x : r.slip) x -= b;
+    r.ref_bias_removed = b;
+    largest = std::max(largest, std::abs(b));
+  }
+  return fmt::format(
+      "the reference speed was constant and quantised (a roller read at {:.2g} m/s resolution): "
+      "each run's slip is off by up to half a step of it ({:.2g}); the runs' slips were levelled "
+      "at zero force (largest correction {:.2g})",
+      runs.front().v_ref_step_mps, runs.front().ref_bias_bound, largest);
 }
 
 }  // namespace brakefit::gap

@@ -25,9 +25,17 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   }
   if (runs.size() < 2)
     throw InputError("gap diagnosis: fewer than two runs with 20 samples below the force cap");
+  const std::string levelled = level_reference_biases(runs);
   Report rep;
-  rep.noise_n = noise_of(runs);
-  rep.before = fit_runs(pointers(runs), {}, start);
+  if (!levelled.empty()) rep.notes.push_back(levelled);
+  // A constant quantised reference leaves a slip bias common to the runs within half a step: a
+  // nuisance term of every fit (the baseline too), not an effect.
+  for (const Run& r : runs)
+    if (r.ref_bias_bound > 0 && rep.baseline_effects.empty())
+      rep.baseline_effects.push_back(Effect::ReferenceBias);
+  rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
+  rep.floor = noise_floor(runs, rep.before.params);
+  rep.noise_n = rep.floor.total_n();
   const MfParams base{
       rep.before.params[0], rep.before.params[1], rep.before.params[2], rep.before.params[3], 0, 0};
   // Two starts for every fit: the baseline (B, C, D, E that absorbed the effect, often the
@@ -40,8 +48,8 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
     Fit b = fit_runs(train, e, neutral);
     return b.ssr < a.ssr ? b : a;
   };
-  rep.gap_before_rmse_n = heldout(runs, {}, fit);
-  rep.where = where_rows(runs, rep.before.params);
+  rep.gap_before_rmse_n = heldout(runs, rep.baseline_effects, fit);
+  rep.where = where_rows(runs, rep.before.params, rep.baseline_effects);
 
   // A cradle cap exists on a roller only.
   std::vector<Effect> candidates;
@@ -54,7 +62,7 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   if (cap) {
     // Found from how the runs end, not fitted: before, the baseline on the whole runs (the
     // runaway at the cap included); after, the baseline on the runs below the cap.
-    put_cap_first(rep, cap->cap_n, heldout(runs_in, {}, fit));
+    put_cap_first(rep, cap->cap_n, heldout(runs_in, rep.baseline_effects, fit));
     rep.notes.push_back(fmt::format(
         "every run ran away at {:.0f} N (spread {:.1f} %) while its force was still rising with "
         "slip ({:.0f} % of the initial slope): the force was capped before the tyre's peak (a "
@@ -129,16 +137,18 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
                              "roller runs reached ({} of {} road samples beyond it are left out: "
                              "the roller fit says nothing there)",
                              100 * max_slip, dropped, total));
-  rep.noise_n = noise_of(road);
+
   const MfParams base{
       roller_fit.params[0], roller_fit.params[1], roller_fit.params[2], roller_fit.params[3], 0, 0};
   const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
     return fit_effects(train, e, base);  // the roller's B, C, D, E held
   };
   rep.before = fit(pointers(road), {});  // the roller's parameters on the road
+  rep.floor = noise_floor(road, rep.before.params);
+  rep.noise_n = rep.floor.total_n();
   rep.before.stderr_.assign(roller_fit.stderr_.begin(), roller_fit.stderr_.begin() + 4);
   rep.gap_before_rmse_n = heldout(road, {}, fit);
-  rep.where = where_rows(road, rep.before.params);
+  rep.where = where_rows(road, rep.before.params, rep.baseline_effects);
   select_effects(rep, road, {kTransferEffects.begin(), kTransferEffects.end()}, fit, o,
                  "the road runs cannot separate {} from {} (held-out gains {:.3f} and {:.3f})");
   if (capped) {

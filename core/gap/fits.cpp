@@ -57,6 +57,26 @@ class GapProblem final : public fit::LeastSquaresProblem {
 
 }  // namespace
 
+namespace {
+
+struct ParamRange {
+  double lo, hi, start;
+};
+/// An effect parameter's fit range: its physical range, but the cradle cap's from the runs' peak
+/// force (it starts there) and the reference bias's from the runs' quantisation.
+ParamRange param_range(Effect e, const EffectParam& ep, const std::vector<const Run*>& runs,
+                       double peak) {
+  if (e == Effect::CradleCap) return {0.3 * peak, 2.0 * peak, peak};
+  if (e == Effect::ReferenceBias) {
+    double bound = 1e-12;
+    for (const Run* r : runs) bound = std::max(bound, r->ref_bias_bound);
+    return {-bound, bound, 0.0};
+  }
+  return {ep.lo, ep.hi, ep.start};
+}
+
+}  // namespace
+
 Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
              const MfParams& start) {
   const auto np = static_cast<Eigen::Index>(param_count(effects));
@@ -70,10 +90,10 @@ Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& eff
   Eigen::Index i = 4;
   for (Effect e : effects)
     for (const EffectParam& ep : effect_params(e)) {
-      const bool cap = e == Effect::CradleCap;  // starts at the largest force measured
-      lo(i) = cap ? 0.3 * peak : ep.lo;
-      hi(i) = cap ? 2.0 * peak : ep.hi;
-      x0(i++) = cap ? peak : ep.start;
+      const ParamRange r = param_range(e, ep, runs, peak);
+      lo(i) = r.lo;
+      hi(i) = r.hi;
+      x0(i++) = r.start;
     }
   GapProblem problem(runs, effects);
   fit::LmOptions lm;
@@ -107,11 +127,15 @@ Fit fit_effects(const std::vector<const Run*>& runs, const std::vector<Effect>& 
   const auto np = static_cast<Eigen::Index>(param_count(effects) - 4);
   Eigen::VectorXd lo(np), hi(np), x0(np);
   Eigen::Index i = 0;
+  double peak = 0;
+  for (const Run* r : runs)
+    for (double f : r->force_n) peak = std::max(peak, std::abs(f));
   for (Effect e : effects)
     for (const EffectParam& ep : effect_params(e)) {
-      lo(i) = ep.lo;
-      hi(i) = ep.hi;
-      x0(i++) = ep.start;
+      const ParamRange r = param_range(e, ep, runs, peak);
+      lo(i) = r.lo;
+      hi(i) = r.hi;
+      x0(i++) = r.start;
     }
   GapProblem problem(runs, effects, b);
   fit::LmOptions lm;

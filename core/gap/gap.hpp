@@ -31,7 +31,10 @@ enum class Effect {
   LoadTransferShape,
   /// Bench vs bench only, found on the roller runs (not fitted): the two-roller cradle capped the
   /// braking force (Fz sin beta), so the roller never showed the tyre above cap_n.
-  CradleCap
+  CradleCap,
+  /// Not a candidate: a nuisance in every fit when the reference speed was constant and
+  /// quantised (a slip bias common to the runs, within half a quantisation step).
+  ReferenceBias
 };
 inline constexpr std::array<Effect, 8> kAllEffects = {
     Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia,  Effect::BrakeThreshold,
@@ -70,6 +73,17 @@ struct Run {
   std::vector<double> ref_decel_mps2;    ///< -d v_ref / dt
   std::vector<double> pressure_rate_bar_per_s;
   double noise_n = 0.0;  ///< measurement noise of the force, estimated before decimation
+  /// The speed channels' noise (robust scale of second differences, at least step/sqrt(12)) and
+  /// quantisation steps (0: not quantised), and the force channel's step, before smoothing.
+  double v_ref_sd_mps = 0.0, v_wheel_sd_mps = 0.0;
+  double v_ref_step_mps = 0.0, v_wheel_step_mps = 0.0, force_step_n = 0.0;
+  /// Per point: the standard deviation of the smoothed slip that the speed channels' noise
+  /// leaves (errors in variables: through the local slope it is force noise the fit cannot remove).
+  std::vector<double> slip_sd;
+  /// A constant reference speed read through a quantised channel is off its level by up to half
+  /// a step: a slip bias of up to this much, its own in every run (0: not such a channel).
+  double ref_bias_bound = 0.0;
+  double ref_bias_removed = 0.0;  ///< the bias taken out (level_reference_biases)
   /// Slip rate at the start of the run (least squares over its first 40 ms, full rate): before
   /// the event the slip is taken as the ramp from zero at this rate (time offset).
   double initial_slip_rate_per_s = 0.0;
@@ -136,14 +150,29 @@ struct WhereRow {
   double share = 0.0;  ///< of the total squared residual
 };
 
+/// The noise floor of runs for a curve: the force channel's noise and the slip noise carried
+/// through the curve's local slope (errors in variables), RMS over the points.
+struct Floor {
+  double force_n = 0.0;  ///< force channel
+  double slip_n = 0.0;   ///< slip noise x |dF/dslip| of the curve
+  double total_n() const { return std::hypot(force_n, slip_n); }
+  double slip_sd_ratio = 0.0;                       ///< RMS slip noise (after smoothing)
+  double v_ref_sd_mps = 0.0, v_wheel_sd_mps = 0.0;  ///< RMS over runs
+  double v_ref_step_mps = 0.0, v_wheel_step_mps = 0.0, force_step_n = 0.0;  ///< largest
+};
+Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params);
+
 struct Report {
   std::vector<std::string> verdict;
   std::vector<EffectScore> effects;  ///< first round: every candidate alone on the baseline
-  std::vector<Effect> accepted;
+  std::vector<Effect> accepted;      ///< the baseline's nuisances first, then the named effects
+  /// Terms in every fit, the baseline too (ReferenceBias), not effects: before.params has theirs.
+  std::vector<Effect> baseline_effects;
   std::vector<WhereRow> where;
   double gap_before_rmse_n = 0.0;  ///< held-out (leave one run out)
   double gap_after_rmse_n = 0.0;
-  double noise_n = 0.0;
+  double noise_n = 0.0;  ///< the floor: force noise and slip noise through the slope (floor)
+  Floor floor;
   Fit before, after;
   std::vector<std::string> notes;
   /// A force cap found on the runs (roller cradle): from the runaway at one force, or the fitted

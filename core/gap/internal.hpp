@@ -16,18 +16,38 @@ inline constexpr double kLongVl = 16.7;
 std::vector<double> smooth(const std::vector<double>& x, int half_window);
 /// Central differences (one-sided at the ends).
 std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x);
+/// Least-squares slope over 2 half_window + 1 samples, the window shifted (not shrunk) at the ends.
+std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& x,
+                                int half_window);
 /// Linear interpolation of x(t) at `at`, held at the ends.
 double interp(const std::vector<double>& t, const std::vector<double>& x, double at);
+
+/// A channel's noise: the robust scale of its second differences, at least step/sqrt(12); step
+/// is its quantisation step (0: not quantised).
+struct ChannelNoise {
+  double sd = 0.0, step = 0.0;
+};
+ChannelNoise channel_noise(const std::vector<double>& x);
+/// A quantised channel rebuilt from its transitions: where the level steps between two samples
+/// the signal crossed the middle of the two levels half-way in time; linear between those points,
+/// extrapolated beyond them, and never more than half a step from the level read.
+std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
+                               double step);
+/// White-noise gain of the smoother (the centre Savitzky-Golay weights: sqrt(sum w^2)).
+double smoothing_noise_gain(int half_window);
+
+/// Levels the runs' slip biases from a constant quantised reference (Run::ref_bias_bound): the
+/// slip at zero force is taken common to all runs. Returns a note for the report (empty: none).
+std::string level_reference_biases(std::vector<Run>& runs);
 
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
 /// Leave-one-run-out: RMS over runs of the held-out RMSE with parameters fitted on the others.
 double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects, const Fitter& fit);
-/// RMS of the runs' noise floors.
-double noise_of(const std::vector<Run>& runs);
 std::vector<const Run*> pointers(const std::vector<Run>& runs);
 /// Where: residual of the 4-parameter model by slip region, by phase, by run.
-std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params);
+std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params,
+                                 const std::vector<Effect>& baseline);
 /// A neutral Magic Formula for the runs: D their peak force, C 1.65, E 0, B from the initial slope.
 MfParams neutral_start(const std::vector<Run>& runs);
 /// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,

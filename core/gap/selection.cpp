@@ -61,10 +61,35 @@ double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects,
   return std::sqrt(sq / static_cast<double>(runs.size()));
 }
 
-double noise_of(const std::vector<Run>& runs) {
-  double sq = 0;
-  for (const Run& r : runs) sq += r.noise_n * r.noise_n;
-  return std::sqrt(sq / static_cast<double>(runs.size()));
+Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params) {
+  const MfParams m{params[0], params[1], params[2], params[3], 0, 0};
+  Floor fl;
+  double force_sq = 0, slip_sq = 0, sd_sq = 0;
+  std::size_t points = 0;
+  for (const Run& r : runs) {
+    force_sq += r.noise_n * r.noise_n;
+    fl.v_ref_sd_mps += r.v_ref_sd_mps * r.v_ref_sd_mps;
+    fl.v_wheel_sd_mps += r.v_wheel_sd_mps * r.v_wheel_sd_mps;
+    fl.v_ref_step_mps = std::max(fl.v_ref_step_mps, r.v_ref_step_mps);
+    fl.v_wheel_step_mps = std::max(fl.v_wheel_step_mps, r.v_wheel_step_mps);
+    fl.force_step_n = std::max(fl.force_step_n, r.force_step_n);
+    for (std::size_t i = 0; i < r.slip.size() && i < r.slip_sd.size(); ++i) {
+      const double h = 1e-5;  // dF/dslip of the curve at the point
+      const double slope = (mf_force_n(m, r.slip[i] + h) - mf_force_n(m, r.slip[i] - h)) / (2 * h);
+      slip_sq += slope * slope * r.slip_sd[i] * r.slip_sd[i];
+      sd_sq += r.slip_sd[i] * r.slip_sd[i];
+      ++points;
+    }
+  }
+  const auto n = static_cast<double>(runs.size());
+  fl.force_n = std::sqrt(force_sq / n);
+  fl.v_ref_sd_mps = std::sqrt(fl.v_ref_sd_mps / n);
+  fl.v_wheel_sd_mps = std::sqrt(fl.v_wheel_sd_mps / n);
+  if (points > 0) {
+    fl.slip_n = std::sqrt(slip_sq / static_cast<double>(points));
+    fl.slip_sd_ratio = std::sqrt(sd_sq / static_cast<double>(points));
+  }
+  return fl;
 }
 
 std::vector<const Run*> pointers(const std::vector<Run>& runs) {
@@ -75,7 +100,8 @@ std::vector<const Run*> pointers(const std::vector<Run>& runs) {
 }
 
 /// Where: residual of the 4-parameter model by slip region, by phase, by run.
-std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params) {
+std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params,
+                                 const std::vector<Effect>& baseline) {
   const MfParams base{params[0], params[1], params[2], params[3], 0, 0};
   std::vector<WhereRow> out;
   const double peak_slip = mf_peak(base, 1.0).slip_ratio;
@@ -93,7 +119,7 @@ std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector
   };
   double total = 0;
   for (const Run& r : runs) {
-    const auto f = predict(r, params, {});
+    const auto f = predict(r, params, baseline);
     for (std::size_t i = 0; i < f.size(); ++i) {
       const double r2 = (r.force_n[i] - f[i]) * (r.force_n[i] - f[i]);
       total += r2;
@@ -138,7 +164,14 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
                     const std::vector<Effect>& candidates, const Fitter& fit, const Options& o,
                     const char* separability_note) {
   const std::vector<const Run*> all = pointers(runs);
-  std::vector<Effect> chosen;
+  double resolution = 0;  // the slip a constant quantised reference can be off by
+  for (const Run& r : runs) resolution = std::max(resolution, r.ref_bias_bound);
+  // The baseline's nuisance terms stay in every model; they are not named.
+  const std::vector<Effect> base = rep.baseline_effects;
+  auto named = [&](const std::vector<Effect>& model) {
+    return std::vector<Effect>(model.begin() + static_cast<long>(base.size()), model.end());
+  };
+  std::vector<Effect> chosen = base;
   double current_heldout = rep.gap_before_rmse_n;
   Fit current_fit = rep.before;
   for (std::size_t round = 0; round < o.max_effects; ++round) {
@@ -187,6 +220,16 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
                         "end of its physical range ({:.4g}): not accepted",
                         to_string(e.effect), eps[j].name, v));
       }
+      // A slip offset no larger than the reference's resolution leaves (half a quantisation
+      // step of a constant reference, on average over the runs) is that resolution, not an
+      // effect.
+      if (inside && e.effect == Effect::SlipOffset && std::abs(e.params[0].second) <= resolution) {
+        inside = false;
+        rep.notes.push_back(fmt::format(
+            "slip_offset {:.2g} is within the reference speed's resolution ({:.2g}, half a "
+            "quantisation step): not accepted",
+            e.params[0].second, resolution));
+      }
       if (inside) pick = k;
     }
     if (pick < order.size()) {
@@ -212,25 +255,25 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
   double first = 0.0;
   for (const auto& e : rep.effects)
-    if (!chosen.empty() && e.effect == chosen.front()) first = e.gain;
-  if (!chosen.empty() && current_heldout > o.noise_factor * rep.noise_n &&
+    if (named(chosen).size() > 0 && e.effect == named(chosen).front()) first = e.gain;
+  if (!named(chosen).empty() && current_heldout > o.noise_factor * rep.noise_n &&
       first < o.min_first_gain) {
     rep.notes.push_back(fmt::format(
         "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are left "
         "against {:.1f} N of noise: the residual has a structure no candidate explains (is the "
         "curve a Magic Formula?), so no effect is named",
-        to_string(chosen.front()), 100 * first, current_heldout, rep.noise_n));
+        to_string(named(chosen).front()), 100 * first, current_heldout, rep.noise_n));
     for (auto& e : rep.effects) e.accepted = false;
-    chosen.clear();
+    chosen = base;
     current_fit = rep.before;
     current_heldout = rep.gap_before_rmse_n;
   }
   rep.accepted = chosen;
   rep.after = current_fit;
   rep.gap_after_rmse_n = current_heldout;
-  for (Effect e : chosen) rep.verdict.push_back(to_string(e));
+  for (Effect e : named(chosen)) rep.verdict.push_back(to_string(e));
   const bool gap_left = rep.gap_after_rmse_n > o.noise_factor * rep.noise_n;
-  if (chosen.empty()) {
+  if (named(chosen).empty()) {
     rep.verdict.push_back(gap_left ? "unexplained" : "none");
   } else if (gap_left) {
     rep.verdict.push_back("unexplained");

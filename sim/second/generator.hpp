@@ -1,0 +1,70 @@
+#pragma once
+// The second physics (generator B), written apart from sim/simulator.*: MF 6.1 tyres read from
+// .tir files (or a brush-model tyre), an adaptive-step RK4 wheel and vehicle integrator, the other
+// brakes of the vehicle working on the ground, load transfer through MF 6.1's load laws, and a
+// tester's export: speeds quantised, pressure filtered and quantised, jittered time stamps on a
+// coarse clock, encoder eccentricity (once-per-revolution ripple), a leading stationary part,
+// and events that end just short of the detector's thresholds (the tester switches off on its
+// own filtered slip). Its output is the event CSV text a tester's software would export.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/can/layout.hpp"
+#include "core/rng.hpp"
+#include "sim/second/tyre.hpp"
+
+namespace brakefit::sim2 {
+
+/// What a tester's software does to the signals before it exports them.
+struct TesterExport {
+  double sample_hz = 1000;
+  double jitter_ratio = 0.2;         ///< stamp jitter, sigma as a fraction of the interval
+  double stamp_resolution_s = 1e-3;  ///< stamps are rounded to this clock (repeats happen)
+  double speed_step_mps = 0.001;     ///< speeds quantised to this step (0.5-3 mm/s)
+  double pressure_filter_s = 0.01;   ///< first-order filter on the pressure channel
+  double pressure_step_bar = 0.01;
+  double pressure_noise_bar = 0.03;
+  double eccentricity_ref = 2e-4, eccentricity_wheel = 2e-4;  ///< relative speed ripple
+  double slip_filter_s = 0.05;  ///< the tester's own slip filter for its switch-off
+  double switch_off_slip = 0.27, lock_slip = 0.94;
+  double leading_s = 0.3;  ///< rolling before the pedal
+};
+
+/// One brake run of generator B.
+struct RunCase {
+  can::BenchKind bench = can::BenchKind::Roller;
+  Mf61Longitudinal tyre;
+  bool brush = false;  ///< a brush-model tyre (not a Magic Formula) around the MF tyre
+  BrushTyre brush_tyre;
+  double fz_n = 4000, pressure_pa = 2.2e5;
+  double speed_kmh = 5, ramp_bar_per_s = 25, max_pressure_bar = 150;
+  double radius_m = 0.3, inertia_kgm2 = 0.2, brake_gain_nm_per_bar = 20, threshold_bar = 0;
+  // effects
+  double relaxation_m = 0, time_offset_s = 0, radius_error_ratio = 0, lmuv = 0;
+  // the vehicle (ground)
+  double mass_kg = 1500, load_per_decel = 0;  ///< relative load change per m/s^2 (0: none)
+  double other_brakes_ratio = 2.0;  ///< the other wheels' brake force / this wheel's, per bar
+  double other_mu = 1.0;            ///< the other wheels' friction limit (x their load)
+  TesterExport tester;
+  std::uint64_t seed = 1;
+};
+
+/// Simulates the run and returns the tester's export as an event CSV (the `brakefit export`
+/// format; the header carries what a station knows: bench, radii, load, gain, pressure, speed).
+std::string simulate_event_csv(const RunCase& c);
+
+/// The tyres of sim/second/tyres/*.tir, parsed (read from the source tree).
+const std::vector<Mf61Longitudinal>& tyre_library();
+
+/// A set of three runs of one tyre, vehicle and effect, as the referee draws it. effect: a gap
+/// effect name, "none" or "misspecified"; magnitude in the diagnosis parameter's unit (for
+/// load_transfer it is overwritten with the D scale per m/s^2 of the drawn vehicle and tyre).
+struct SetDraw {
+  std::vector<RunCase> runs;
+  double magnitude = 0;
+};
+SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitude,
+                 std::uint64_t seed);
+
+}  // namespace brakefit::sim2
