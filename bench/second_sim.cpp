@@ -2,7 +2,7 @@
 // CSVs, the tester's export, for `brakefit gap` or anyone else's tool:
 //   second_sim --bench roller|ground --effect none|relaxation_length|... [--magnitude X]
 //              [--seed N] [--ripple R] [--speed-step MPS] [--pressure-filter S]
-//              [--pressure-step BAR] [--jitter RATIO] --out DIR
+//              [--pressure-step BAR] [--jitter RATIO] [--ripple-ref R] --out DIR
 // The optional overrides replace the drawn tester export (R: both encoders' relative ripple).
 // Prints the drawn tyre, the truth magnitude and the files written.
 #include <fmt/format.h>
@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
   double magnitude = 0;
   std::uint64_t seed = 1;
   double ripple = -1, speed_step = -1, pressure_filter = -1, pressure_step = -1,
-         jitter = -1;  // < 0: as drawn
+         jitter = -1, ripple_ref = -1;  // < 0: as drawn
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--bench")
@@ -41,6 +41,8 @@ int main(int argc, char** argv) {
       pressure_filter = std::atof(v.c_str());
     else if (k == "--pressure-step")
       pressure_step = std::atof(v.c_str());
+    else if (k == "--ripple-ref")
+      ripple_ref = std::atof(v.c_str());
     else if (k == "--jitter")
       jitter = std::atof(v.c_str());
     else if (k == "--out")
@@ -61,6 +63,7 @@ int main(int argc, char** argv) {
       if (ripple >= 0) r.tester.eccentricity_ref = r.tester.eccentricity_wheel = ripple;
       if (speed_step >= 0) r.tester.speed_step_mps = speed_step;
       if (pressure_filter >= 0) r.tester.pressure_filter_s = pressure_filter;
+      if (ripple_ref >= 0) r.tester.eccentricity_ref = ripple_ref;
       if (pressure_step >= 0) r.tester.pressure_step_bar = pressure_step;
       if (jitter >= 0) r.tester.jitter_ratio = jitter;
     }

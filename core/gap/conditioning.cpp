@@ -241,14 +241,18 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   // staircase steps, the speed crossed the middle of the two levels), as an encoder's speed is
   // from its edge times.
   ChannelNoise ref_noise = channel_noise(full.v_ref_mps), wheel_noise = channel_noise(v_wheel);
+  // Speeds from encoder frames (frame means of edge-timed counts) are not an export's staircase:
+  // their discrete values are the edge clock's, far finer than the speed.
+  if (c.speed_timing == "frame_mean") ref_noise.step = wheel_noise.step = 0;
   // The two speeds come from one export at one resolution: a reference that never changed level
   // (a roller held at speed) shows no step of its own but has the wheel's.
-  if (ref_noise.step == 0 && wheel_noise.step > 0) {
+  // (A roller's reference flipping between two neighbouring levels is such a channel too.)
+  if (const double q = std::max(ref_noise.step, wheel_noise.step); q > 0) {
     const auto [lo, hi] = std::minmax_element(full.v_ref_mps.begin(), full.v_ref_mps.end());
-    if (*hi - *lo < 0.5 * wheel_noise.step) {
-      ref_noise.step = wheel_noise.step;
-      ref_noise.sd = std::max(ref_noise.sd, ref_noise.step / std::sqrt(12.0));
-      full.ref_bias_bound = 0.5 * ref_noise.step / std::max(*lo, 1e-6);
+    if (*hi - *lo < (c.bench == can::BenchKind::Roller ? 1.5 : 0.5) * q) {
+      ref_noise.step = q;
+      ref_noise.sd = std::max(ref_noise.sd, q / std::sqrt(12.0));
+      full.ref_bias_bound = 0.5 * q / std::max(*lo, 1e-6);
     }
   }
   for (auto [v, cn] : {std::pair{&full.v_ref_mps, &ref_noise}, std::pair{&v_wheel, &wheel_noise}})
@@ -304,6 +308,18 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
         gain * std::hypot(full.v_wheel_sd_mps / vr[i], vw[i] * ref_sd / (vr[i] * vr[i])));
   }
   full.wheel_accel_mps2 = derivative(full.t_s, vw);
+  // The encoders' angles (trapezoidal integration of speed / radius).
+  const double ref_radius_m =
+      c.bench == can::BenchKind::Roller ? c.roller_radius_m : c.fifth_wheel_radius_m;
+  full.wheel_angle_rad.assign(vw.size(), 0.0);
+  full.ref_angle_rad.assign(vr.size(), 0.0);
+  for (std::size_t i = 1; i < vw.size(); ++i) {
+    const double dt = full.t_s[i] - full.t_s[i - 1];
+    full.wheel_angle_rad[i] =
+        full.wheel_angle_rad[i - 1] + 0.5 * (vw[i] + vw[i - 1]) * dt / c.wheel_radius_m;
+    full.ref_angle_rad[i] =
+        full.ref_angle_rad[i - 1] + 0.5 * (vr[i] + vr[i - 1]) * dt / ref_radius_m;
+  }
   auto dref = derivative(full.t_s, vr);
   for (double& d : dref) d = -d;
   full.ref_decel_mps2 = dref;
@@ -344,6 +360,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     r.v_ref_mps.push_back(full.v_ref_mps[i]);
     r.force_n.push_back(full.force_n[i]);
     r.wheel_accel_mps2.push_back(full.wheel_accel_mps2[i]);
+    r.wheel_angle_rad.push_back(full.wheel_angle_rad[i]);
+    r.ref_angle_rad.push_back(full.ref_angle_rad[i]);
     r.ref_decel_mps2.push_back(full.ref_decel_mps2[i]);
     r.pressure_rate_bar_per_s.push_back(full.pressure_rate_bar_per_s[i]);
   }

@@ -14,8 +14,9 @@ Run up_to(const Run& r, const std::vector<double>& x, double limit) {
   while (n < x.size() && x[n] <= limit) ++n;
   Run out = r;
   for (auto* v : {&out.t_s, &out.slip, &out.v_ref_mps, &out.force_n, &out.wheel_accel_mps2,
-                  &out.ref_decel_mps2, &out.pressure_rate_bar_per_s})
-    v->resize(n);
+                  &out.ref_decel_mps2, &out.pressure_rate_bar_per_s, &out.slip_sd,
+                  &out.wheel_angle_rad, &out.ref_angle_rad})
+    if (v->size() > n) v->resize(n);
   return out;
 }
 

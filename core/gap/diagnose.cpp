@@ -25,15 +25,21 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   }
   if (runs.size() < 2)
     throw InputError("gap diagnosis: fewer than two runs with 20 samples below the force cap");
-  const std::string levelled = level_reference_biases(runs);
   Report rep;
-  if (!levelled.empty()) rep.notes.push_back(levelled);
   // A constant quantised reference leaves a slip bias common to the runs within half a step: a
   // nuisance term of every fit (the baseline too), not an effect.
   for (const Run& r : runs)
     if (r.ref_bias_bound > 0 && rep.baseline_effects.empty())
       rep.baseline_effects.push_back(Effect::ReferenceBias);
   rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
+  // The instruments' own structure first: the encoders' ripple (from the baseline's residual),
+  // then each run's reference bias (levelled at zero force, which the ripple would disturb).
+  const std::string ripple = remove_encoder_ripple(runs, rep.before.params, rep.baseline_effects);
+  const std::string levelled = level_reference_biases(runs);
+  for (const std::string& note : {ripple, levelled})
+    if (!note.empty()) rep.notes.push_back(note);
+  if (!ripple.empty() || !levelled.empty())
+    rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
   rep.floor = noise_floor(runs, rep.before.params);
   rep.noise_n = rep.floor.total_n();
   const MfParams base{

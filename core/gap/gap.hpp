@@ -70,6 +70,9 @@ struct Run {
   double brake_gain_n_per_bar = 1.0;
   std::vector<double> t_s, slip, v_ref_mps, force_n;
   std::vector<double> wheel_accel_mps2;  ///< d v_wheel / dt (negative when the wheel slows)
+  /// The encoders' rolled angles (rad) since the run's start: speed / radius integrated (the
+  /// wheel's, and the roller's or fifth wheel's), for their once-per-revolution ripple.
+  std::vector<double> wheel_angle_rad, ref_angle_rad;
   std::vector<double> ref_decel_mps2;    ///< -d v_ref / dt
   std::vector<double> pressure_rate_bar_per_s;
   double noise_n = 0.0;  ///< measurement noise of the force, estimated before decimation

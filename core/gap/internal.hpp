@@ -40,6 +40,12 @@ double smoothing_noise_gain(int half_window);
 /// slip at zero force is taken common to all runs. Returns a note for the report (empty: none).
 std::string level_reference_biases(std::vector<Run>& runs);
 
+/// Estimates each run's once-per-revolution encoder ripple (wheel and reference, for runs that
+/// span 1.5 revolutions) from the residual of the baseline (params, with its nuisance terms)
+/// and takes it out of the slip. Returns a note (empty: none found).
+std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<double>& params,
+                                  const std::vector<Effect>& baseline);
+
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
 /// Leave-one-run-out: RMS over runs of the held-out RMSE with parameters fitted on the others.

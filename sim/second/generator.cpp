@@ -235,7 +235,10 @@ SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitu
   base.fz_n = base.tyre.fnomin_n * rng.uniform(0.8, 1.15);
   base.pressure_pa = base.tyre.nompres_pa * rng.uniform(0.8, 1.1);
   base.radius_m = rng.uniform(0.28, 0.34);
-  base.inertia_kgm2 = rng.uniform(0.02, 0.08);  // no inertia effect: a light wheel
+  // No inertia effect: a light wheel (its I a / R^2 well below the force noise; on the ground the
+  // wheel's deceleration is ten times the roller's).
+  base.inertia_kgm2 =
+      bench == can::BenchKind::Roller ? rng.uniform(0.02, 0.05) : rng.uniform(0.005, 0.015);
   Contact k;
   k.fz_n = base.fz_n;
   k.pressure_pa = base.pressure_pa;

@@ -1,0 +1,181 @@
+// Encoder ripple: an eccentric or unevenly divided code wheel reads a speed that rises and falls
+// once per revolution. Against the tyre's slope that is a force residual at the revolution rate
+// (5e-4 of speed is 35 N on a 70 kN/unit-slip tyre), which no effect explains and which a
+// diagnosis must not take for one. It is estimated per run and encoder from the baseline's
+// residual and taken out of the slip.
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+
+namespace brakefit::gap {
+
+namespace {
+
+/// A run must span this many revolutions of an encoder for its ripple's amplitude to be told
+/// from the run's own trend; a shorter run (down to kMinPhaseRevolutions) takes the amplitude
+/// found on the longer runs of the same encoder and estimates only its phase.
+constexpr double kMinRevolutions = 1.5;
+constexpr double kMinPhaseRevolutions = 0.3;
+/// The ripple's amplitude at the revolution rate against its largest at half and twice it.
+constexpr double kNarrowBand = 2.0;
+
+struct RippleFit {
+  std::array<bool, 2> used{};      ///< wheel, reference
+  std::array<double, 2> c{}, s{};  ///< cos and sin coefficients (relative speed ripple)
+  std::array<double, 2> se{};      ///< standard error of the amplitude
+};
+
+/// Regresses the residual y on a polynomial trend in time (order trend, kept out of the ripple)
+/// and K (1 - s) cos/sin of the encoders' angles (the reference's with the opposite sign).
+RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vector<double>& gain,
+                     std::array<bool, 2> use, int trend, double frequency_scale = 1.0) {
+  RippleFit out;
+  const std::size_t n = r.t_s.size();
+  const int enc = static_cast<int>(use[0]) + static_cast<int>(use[1]);
+  const Eigen::Index cols = trend + 1 + 2 * enc;
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(n), cols);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(n));
+  const double t_end = std::max(r.t_s.back(), 1e-6);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto row = static_cast<Eigen::Index>(i);
+    const double u = r.t_s[i] / t_end;
+    double p = 1;
+    for (int k = 0; k <= trend; ++k, p *= u) a(row, k) = p;
+    Eigen::Index c = trend + 1;
+    for (int e = 0; e < 2; ++e) {
+      if (!use[static_cast<std::size_t>(e)]) continue;
+      const double ang = frequency_scale * (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
+      const double sign = e == 0 ? 1.0 : -1.0;
+      a(row, c++) = sign * gain[i] * std::cos(ang);
+      a(row, c++) = sign * gain[i] * std::sin(ang);
+    }
+    b(row) = y[i];
+  }
+  const Eigen::VectorXd x = a.colPivHouseholderQr().solve(b);
+  const Eigen::VectorXd res = b - a * x;
+  const double s2 =
+      res.squaredNorm() / std::max(1.0, static_cast<double>(n) - static_cast<double>(cols));
+  const Eigen::MatrixXd cov = s2 * (a.transpose() * a).inverse();
+  Eigen::Index c = trend + 1;
+  for (std::size_t e = 0; e < 2; ++e) {
+    if (!use[e]) continue;
+    out.used[e] = true;
+    out.c[e] = x(c);
+    out.s[e] = x(c + 1);
+    out.se[e] = std::sqrt(0.5 * (cov(c, c) + cov(c + 1, c + 1)));
+    c += 2;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<double>& params,
+                                  const std::vector<Effect>& baseline) {
+  const MfParams m{params[0], params[1], params[2], params[3], 0, 0};
+  struct Prepared {
+    std::vector<double> residual, gain;
+    std::array<double, 2> revolutions{};
+  };
+  std::vector<Prepared> prep(runs.size());
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const Run& r = runs[k];
+    const std::size_t n = r.t_s.size();
+    if (n < 30 || r.wheel_angle_rad.size() != n || r.ref_angle_rad.size() != n) continue;
+    const auto f = predict(r, params, baseline);
+    Prepared& p = prep[k];
+    for (std::size_t i = 0; i < n; ++i) {
+      // Residual = K (1 - s) (eps_wheel - eps_ref) for speed ripples eps (first order in eps).
+      const double h = 1e-5;
+      const double slope = (mf_force_n(m, r.slip[i] + h) - mf_force_n(m, r.slip[i] - h)) / (2 * h);
+      p.gain.push_back(slope * (1 - r.slip[i]));
+      p.residual.push_back(r.force_n[i] - f[i]);
+    }
+    p.revolutions = {r.wheel_angle_rad.back() / (2 * M_PI), r.ref_angle_rad.back() / (2 * M_PI)};
+  }
+  // Pass 1: amplitude and phase on the runs spanning kMinRevolutions; an encoder's amplitude is
+  // the median of its significant ones (one code wheel, one eccentricity).
+  std::vector<RippleFit> fits(runs.size());
+  std::array<std::vector<double>, 2> amps;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    if (prep[k].gain.empty()) continue;
+    const std::array<bool, 2> use{prep[k].revolutions[0] >= kMinRevolutions,
+                                  prep[k].revolutions[1] >= kMinRevolutions};
+    if (!use[0] && !use[1]) continue;
+    fits[k] = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2);
+    // A ripple is narrow-band: at the revolution rate it must stand well above the same fit at
+    // neighbouring rates (a residual left by an unmodelled effect is smooth and broad-band, and
+    // must not be taken for one).
+    std::array<double, 2> neighbours{};
+    for (const double scale : {0.5, 2.0}) {
+      const RippleFit nf = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2, scale);
+      for (std::size_t e = 0; e < 2; ++e)
+        neighbours[e] = std::max(neighbours[e], std::hypot(nf.c[e], nf.s[e]));
+    }
+    for (std::size_t e = 0; e < 2; ++e) {
+      const double amp = std::hypot(fits[k].c[e], fits[k].s[e]);
+      if (fits[k].used[e] && amp > 3 * fits[k].se[e] && amp > kNarrowBand * neighbours[e] &&
+          amp < 0.01)
+        amps[e].push_back(amp);
+      else
+        fits[k].used[e] = false;
+    }
+  }
+  std::array<double, 2> amplitude{};
+  for (std::size_t e = 0; e < 2; ++e) {
+    if (amps[e].empty()) continue;
+    std::nth_element(amps[e].begin(), amps[e].begin() + static_cast<long>(amps[e].size() / 2),
+                     amps[e].end());
+    amplitude[e] = amps[e][amps[e].size() / 2];
+  }
+  // Pass 2: shorter runs (and longer ones whose own estimate did not pass) take that amplitude;
+  // their phase from a regression with a linear trend.
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    if (prep[k].gain.empty()) continue;
+    std::array<bool, 2> use{};
+    for (std::size_t e = 0; e < 2; ++e)
+      use[e] =
+          !fits[k].used[e] && amplitude[e] > 0 && prep[k].revolutions[e] >= kMinPhaseRevolutions;
+    if (!use[0] && !use[1]) continue;
+    const RippleFit short_fit = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 1);
+    for (std::size_t e = 0; e < 2; ++e) {
+      if (!use[e]) continue;
+      const double amp = std::hypot(short_fit.c[e], short_fit.s[e]);
+      if (!(amp > 0)) continue;
+      fits[k].used[e] = true;
+      fits[k].c[e] = short_fit.c[e] * amplitude[e] / amp;
+      fits[k].s[e] = short_fit.s[e] * amplitude[e] / amp;
+    }
+  }
+  int corrected = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    Run& r = runs[k];
+    if (!fits[k].used[0] && !fits[k].used[1]) continue;
+    ++corrected;
+    // s_measured = s - (1 - s) eps_wheel + (1 - s) eps_ref: the ripple is added back.
+    for (std::size_t i = 0; i < r.slip.size(); ++i) {
+      double fix = 0;
+      for (std::size_t e = 0; e < 2; ++e) {
+        if (!fits[k].used[e]) continue;
+        const double ang = e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i];
+        const double eps = fits[k].c[e] * std::cos(ang) + fits[k].s[e] * std::sin(ang);
+        fix += (e == 0 ? 1.0 : -1.0) * (1 - r.slip[i]) * eps;
+      }
+      r.slip[i] += fix;
+    }
+  }
+  if (corrected == 0) return {};
+  return fmt::format(
+      "encoder ripple (once per revolution: an eccentric or unevenly divided code wheel) was "
+      "found and taken out of the slip in {} of {} runs (amplitude of the speed: wheel {:.2g}, "
+      "reference {:.2g})",
+      corrected, runs.size(), amplitude[0], amplitude[1]);
+}
+
+}  // namespace brakefit::gap
