@@ -22,13 +22,15 @@ namespace {
 /// found on the longer runs of the same encoder and estimates only its phase.
 constexpr double kMinRevolutions = 1.5;
 constexpr double kMinPhaseRevolutions = 0.3;
-/// The ripple's amplitude at the revolution rate against its largest at half and twice it.
+/// The residual the ripple explains at the revolution rate against the most it explains at half
+/// and at twice that rate.
 constexpr double kNarrowBand = 2.0;
 
 struct RippleFit {
   std::array<bool, 2> used{};      ///< wheel, reference
   std::array<double, 2> c{}, s{};  ///< cos and sin coefficients (relative speed ripple)
   std::array<double, 2> se{};      ///< standard error of the amplitude
+  double ssr = 0;                  ///< residual sum of squares of the regression
 };
 
 /// Regresses the residual y on a polynomial trend in time (order trend, kept out of the ripple)
@@ -59,6 +61,7 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vect
   }
   const Eigen::VectorXd x = a.colPivHouseholderQr().solve(b);
   const Eigen::VectorXd res = b - a * x;
+  out.ssr = res.squaredNorm();
   const double s2 =
       res.squaredNorm() / std::max(1.0, static_cast<double>(n) - static_cast<double>(cols));
   const Eigen::MatrixXd cov = s2 * (a.transpose() * a).inverse();
@@ -112,16 +115,19 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     // A ripple is narrow-band: at the revolution rate it must stand well above the same fit at
     // neighbouring rates (a residual left by an unmodelled effect is smooth and broad-band, and
     // must not be taken for one).
-    std::array<double, 2> neighbours{};
-    for (const double scale : {0.5, 2.0}) {
-      const RippleFit nf = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2, scale);
-      for (std::size_t e = 0; e < 2; ++e)
-        neighbours[e] = std::max(neighbours[e], std::hypot(nf.c[e], nf.s[e]));
-    }
+    // (Compared by the residual they explain beyond the trend: a fit at a low rate over a short
+    // run is ill-conditioned, its coefficients large but its explained variance not.)
+    const double trend_ssr =
+        fit_ripple(runs[k], prep[k].residual, prep[k].gain, {false, false}, 2).ssr;
+    double neighbours = 0;
+    for (const double scale : {0.5, 2.0})
+      neighbours = std::max(
+          neighbours,
+          trend_ssr - fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2, scale).ssr);
+    const bool narrow = trend_ssr - fits[k].ssr > kNarrowBand * neighbours;
     for (std::size_t e = 0; e < 2; ++e) {
       const double amp = std::hypot(fits[k].c[e], fits[k].s[e]);
-      if (fits[k].used[e] && amp > 3 * fits[k].se[e] && amp > kNarrowBand * neighbours[e] &&
-          amp < 0.01)
+      if (fits[k].used[e] && narrow && amp > 3 * fits[k].se[e] && amp < 0.01)
         amps[e].push_back(amp);
       else
         fits[k].used[e] = false;
