@@ -12,6 +12,49 @@
 
 namespace brakefit::gap {
 
+namespace {
+
+/// The centre weights of the quadratic Savitzky-Golay filter of half window m, k = -m..m.
+std::vector<double> sg_weights(int half_window) {
+  const double m = half_window;
+  const double norm = (2 * m - 1) * (2 * m + 1) * (2 * m + 3);
+  std::vector<double> w;
+  for (int k = -half_window; k <= half_window; ++k)
+    w.push_back((3 * (3 * m * m + 3 * m - 1) - 15.0 * k * k) / norm);
+  return w;
+}
+
+}  // namespace
+
+double smoothed_noise_sd(const std::vector<double>& x, int half_window) {
+  // The difference of the smoother and one three times as wide: both keep a quadratic, so the
+  // signal cancels but for its third and higher derivatives, and the noise's share of it is
+  // known for white noise (wa.wa - 2 wa.wb + wb.wb). Scaled to the smoother's own share
+  // (wa.wa), it is the noise the smoother leaves, whatever the noise's correlation: white noise,
+  // the anti-correlated error of edge-timed frame means (consecutive frames share an edge) and
+  // the correlated error of a rebuilt staircase each count as what they leave.
+  const int wide = 3 * half_window;
+  if (half_window <= 0 || x.size() < static_cast<std::size_t>(4 * wide + 10)) return 0.0;
+  const auto a = smooth(x, half_window), b = smooth(x, wide);
+  std::vector<double> d;
+  for (std::size_t i = static_cast<std::size_t>(wide);
+       i + static_cast<std::size_t>(wide) < x.size(); ++i)
+    d.push_back(a[i] - b[i]);
+  std::vector<double> dev = d;
+  std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
+  const double med = dev[dev.size() / 2];
+  for (double& v : dev) v = std::abs(v - med);
+  std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
+  const double sd_d = dev[dev.size() / 2] / 0.6745;
+  const auto wa = sg_weights(half_window), wb = sg_weights(wide);
+  double aa = 0, ab = 0, bb = 0;
+  for (double w : wa) aa += w * w;
+  for (double w : wb) bb += w * w;
+  for (int k = -half_window; k <= half_window; ++k)
+    ab += wa[static_cast<std::size_t>(k + half_window)] * wb[static_cast<std::size_t>(k + wide)];
+  return sd_d * std::sqrt(aa / std::max(aa - 2 * ab + bb, 1e-12));
+}
+
 std::vector<double> smooth(const std::vector<double>& x, int hw) {
   // Zero-phase Savitzky-Golay (quadratic, centred, no lag; the window shrinks at the ends). A
   // moving average would bias the slip where it curves: near the peak of a 250 bar/s stop the
@@ -178,9 +221,6 @@ constexpr double kLockSlip = 0.9;
 /// A lock-up runaway starts past the linear region: jumps below this slip are noise. (2 %: a
 /// wheel capped by the cradle below its peak runs away from there.)
 constexpr double kRunawayMinSlip = 0.02;
-/// The share of a quantised channel's step/sqrt(12) left after rebuilding it from its
-/// transitions (its floor).
-constexpr double kDequantisedShare = 0.5;
 
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o) {
@@ -258,9 +298,6 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   for (auto [v, cn] : {std::pair{&full.v_ref_mps, &ref_noise}, std::pair{&v_wheel, &wheel_noise}})
     if (cn->step > 0) {
       *v = dequantise(full.t_s, *v, cn->step);
-      // What is left: the random part of the rebuilt channel, and at least a share of the
-      // staircase's step/sqrt(12) (the rebuilt signal is exact at the anchors only).
-      cn->sd = std::max(channel_noise(*v).sd, kDequantisedShare * cn->step / std::sqrt(12.0));
     }
   // Noise of each channel: robust scale of second differences (the signal is smooth at 1 kHz;
   // first differences would count a 250 bar/s ramp, 16 N per sample, as noise), and at least
@@ -293,19 +330,21 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     align(full.v_ref_mps);
     align(v_wheel);
   }
+  // The slip's noise after smoothing, measured on the slip itself (smoothed_noise_sd): the two
+  // speeds' errors are not independent (a roller's speed wobble is followed by the wheel and
+  // cancels in Eq. 1), and white noise, the anti-correlated error of edge-timed frame means and
+  // the correlated error of a rebuilt staircase each count as what they leave. (A constant
+  // reference's quantisation is a bias of the run, levelled across runs in the diagnosis.)
+  std::vector<double> raw_slip(v_wheel.size());
+  for (std::size_t i = 0; i < raw_slip.size(); ++i)
+    raw_slip[i] = 1.0 - v_wheel[i] / full.v_ref_mps[i];
+  const double slip_sd = smoothed_noise_sd(raw_slip, o.smooth_half_window);
   const auto vr = smooth(full.v_ref_mps, o.smooth_half_window),
              vw = smooth(v_wheel, o.smooth_half_window);
   full.v_ref_mps = vr;
-  // The slip's noise after smoothing (first-order propagation of both speeds' noise through
-  // Eq. 1, times the smoother's white-noise gain).
-  const double gain = smoothing_noise_gain(o.smooth_half_window);
   for (std::size_t i = 0; i < vr.size(); ++i) {
     full.slip.push_back(std::clamp(1.0 - vw[i] / vr[i], -1.0, 1.0));  // below 0: a slip offset
-    // (A constant reference's quantisation is a bias of the run, levelled across runs in the
-    // diagnosis, not noise.)
-    const double ref_sd = full.ref_bias_bound > 0 ? 0.0 : full.v_ref_sd_mps;
-    full.slip_sd.push_back(
-        gain * std::hypot(full.v_wheel_sd_mps / vr[i], vw[i] * ref_sd / (vr[i] * vr[i])));
+    full.slip_sd.push_back(slip_sd);
   }
   full.wheel_accel_mps2 = derivative(full.t_s, vw);
   // The encoders' angles (trapezoidal integration of speed / radius).

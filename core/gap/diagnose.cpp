@@ -34,7 +34,13 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
   // The instruments' own structure first: the encoders' ripple (from the baseline's residual),
   // then each run's reference bias (levelled at zero force, which the ripple would disturb).
-  const std::string ripple = remove_encoder_ripple(runs, rep.before.params, rep.baseline_effects);
+  // (Twice more on the refitted baseline: the first estimate sees the ripple through a
+  // baseline it has bent.)
+  std::string ripple = remove_encoder_ripple(runs, rep.before.params, rep.baseline_effects);
+  for (int pass = 0; pass < 2 && !ripple.empty(); ++pass) {
+    rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
+    if (remove_encoder_ripple(runs, rep.before.params, rep.baseline_effects).empty()) break;
+  }
   const std::string levelled = level_reference_biases(runs);
   for (const std::string& note : {ripple, levelled})
     if (!note.empty()) rep.notes.push_back(note);

@@ -33,6 +33,9 @@ ChannelNoise channel_noise(const std::vector<double>& x);
 /// extrapolated beyond them, and never more than half a step from the level read.
 std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
                                double step);
+/// The noise a channel keeps after the smoother (half window), measured on the channel: right
+/// for white, anti-correlated and correlated errors alike.
+double smoothed_noise_sd(const std::vector<double>& x, int half_window);
 /// White-noise gain of the smoother (the centre Savitzky-Golay weights: sqrt(sum w^2)).
 double smoothing_noise_gain(int half_window);
 

@@ -105,6 +105,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   // Pass 1: amplitude and phase on the runs spanning kMinRevolutions; an encoder's amplitude is
   // the median of its significant ones (one code wheel, one eccentricity).
   std::vector<RippleFit> fits(runs.size());
+  int corrected = 0, uncorrected = 0;
   std::array<std::vector<double>, 2> amps;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     if (prep[k].gain.empty()) continue;
@@ -140,26 +141,32 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
                      amps[e].end());
     amplitude[e] = amps[e][amps[e].size() / 2];
   }
-  // Pass 2: shorter runs (and longer ones whose own estimate did not pass) take that amplitude;
-  // their phase from a regression with a linear trend.
+  // Pass 2: shorter runs (and longer ones whose own estimate did not pass) take that amplitude
+  // and their phase from a regression with a linear trend, when that regression's own amplitude
+  // agrees with it (within a factor of 2). Where it does not, the ripple stays in the run and
+  // its slip noise carries it (amplitude / sqrt 2 of (1 - s)): the floor is honest about it.
   for (std::size_t k = 0; k < runs.size(); ++k) {
     if (prep[k].gain.empty()) continue;
     std::array<bool, 2> use{};
-    for (std::size_t e = 0; e < 2; ++e)
-      use[e] =
-          !fits[k].used[e] && amplitude[e] > 0 && prep[k].revolutions[e] >= kMinPhaseRevolutions;
+    for (std::size_t e = 0; e < 2; ++e) use[e] = !fits[k].used[e] && amplitude[e] > 0;
     if (!use[0] && !use[1]) continue;
     const RippleFit short_fit = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 1);
     for (std::size_t e = 0; e < 2; ++e) {
       if (!use[e]) continue;
       const double amp = std::hypot(short_fit.c[e], short_fit.s[e]);
-      if (!(amp > 0)) continue;
-      fits[k].used[e] = true;
-      fits[k].c[e] = short_fit.c[e] * amplitude[e] / amp;
-      fits[k].s[e] = short_fit.s[e] * amplitude[e] / amp;
+      if (prep[k].revolutions[e] >= kMinPhaseRevolutions && amp > 0.5 * amplitude[e] &&
+          amp < 2 * amplitude[e]) {
+        fits[k].used[e] = true;
+        fits[k].c[e] = short_fit.c[e] * amplitude[e] / amp;
+        fits[k].s[e] = short_fit.s[e] * amplitude[e] / amp;
+        continue;
+      }
+      Run& r = runs[k];
+      for (std::size_t i = 0; i < r.slip_sd.size(); ++i)
+        r.slip_sd[i] = std::hypot(r.slip_sd[i], amplitude[e] / std::sqrt(2.0) * (1 - r.slip[i]));
+      ++uncorrected;
     }
   }
-  int corrected = 0;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     Run& r = runs[k];
     if (!fits[k].used[0] && !fits[k].used[1]) continue;
@@ -176,12 +183,16 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       r.slip[i] += fix;
     }
   }
-  if (corrected == 0) return {};
+  if (corrected == 0 && uncorrected == 0) return {};
   return fmt::format(
       "encoder ripple (once per revolution: an eccentric or unevenly divided code wheel) was "
       "found and taken out of the slip in {} of {} runs (amplitude of the speed: wheel {:.2g}, "
-      "reference {:.2g})",
-      corrected, runs.size(), amplitude[0], amplitude[1]);
+      "reference {:.2g}){}",
+      corrected, runs.size(), amplitude[0], amplitude[1],
+      uncorrected ? fmt::format("; where a run was too short to place its phase ({} encoder "
+                                "runs), it stays in the run and in its noise floor",
+                                uncorrected)
+                  : std::string());
 }
 
 }  // namespace brakefit::gap
