@@ -293,12 +293,19 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       ref_noise.step = q;
       ref_noise.sd = std::max(ref_noise.sd, q / std::sqrt(12.0));
       full.ref_bias_bound = 0.5 * q / std::max(*lo, 1e-6);
+      // A roller is held at speed: its flips between two levels are the encoder's ripple or
+      // noise at a level boundary, not speed. It is read as its mean (closer to the truth than
+      // either level, and free of the flips' steps).
+      if (c.bench == can::BenchKind::Roller) {
+        double mean = 0;
+        for (double v : full.v_ref_mps) mean += v;
+        mean /= static_cast<double>(full.v_ref_mps.size());
+        std::fill(full.v_ref_mps.begin(), full.v_ref_mps.end(), mean);
+      }
     }
   }
   for (auto [v, cn] : {std::pair{&full.v_ref_mps, &ref_noise}, std::pair{&v_wheel, &wheel_noise}})
-    if (cn->step > 0) {
-      *v = dequantise(full.t_s, *v, cn->step);
-    }
+    if (cn->step > 0) *v = dequantise(full.t_s, *v, cn->step);
   // Noise of each channel: robust scale of second differences (the signal is smooth at 1 kHz;
   // first differences would count a 250 bar/s ramp, 16 N per sample, as noise), and at least
   // the quantisation's step/sqrt(12) (a slowly moving quantised signal has mostly zero

@@ -21,7 +21,7 @@ namespace {
 /// from the run's own trend; a shorter run (down to kMinPhaseRevolutions) takes the amplitude
 /// found on the longer runs of the same encoder and estimates only its phase.
 constexpr double kMinRevolutions = 1.5;
-constexpr double kMinPhaseRevolutions = 0.3;
+constexpr double kMinPhaseRevolutions = 1.0;
 /// The residual the ripple explains at the revolution rate against the most it explains at half
 /// and at twice that rate.
 constexpr double kNarrowBand = 2.0;

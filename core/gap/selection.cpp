@@ -64,8 +64,8 @@ double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects,
 Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params) {
   const MfParams m{params[0], params[1], params[2], params[3], 0, 0};
   Floor fl;
+  // RMS over runs of each run's mean square, as the held-out gap weighs its runs.
   double force_sq = 0, slip_sq = 0, sd_sq = 0;
-  std::size_t points = 0;
   for (const Run& r : runs) {
     force_sq += r.noise_n * r.noise_n;
     fl.v_ref_sd_mps += r.v_ref_sd_mps * r.v_ref_sd_mps;
@@ -73,22 +73,24 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
     fl.v_ref_step_mps = std::max(fl.v_ref_step_mps, r.v_ref_step_mps);
     fl.v_wheel_step_mps = std::max(fl.v_wheel_step_mps, r.v_wheel_step_mps);
     fl.force_step_n = std::max(fl.force_step_n, r.force_step_n);
-    for (std::size_t i = 0; i < r.slip.size() && i < r.slip_sd.size(); ++i) {
+    double run_slip_sq = 0, run_sd_sq = 0;
+    const std::size_t points = std::min(r.slip.size(), r.slip_sd.size());
+    for (std::size_t i = 0; i < points; ++i) {
       const double h = 1e-5;  // dF/dslip of the curve at the point
       const double slope = (mf_force_n(m, r.slip[i] + h) - mf_force_n(m, r.slip[i] - h)) / (2 * h);
-      slip_sq += slope * slope * r.slip_sd[i] * r.slip_sd[i];
-      sd_sq += r.slip_sd[i] * r.slip_sd[i];
-      ++points;
+      run_slip_sq += slope * slope * r.slip_sd[i] * r.slip_sd[i];
+      run_sd_sq += r.slip_sd[i] * r.slip_sd[i];
     }
+    if (points == 0) continue;
+    slip_sq += run_slip_sq / static_cast<double>(points);
+    sd_sq += run_sd_sq / static_cast<double>(points);
   }
   const auto n = static_cast<double>(runs.size());
   fl.force_n = std::sqrt(force_sq / n);
   fl.v_ref_sd_mps = std::sqrt(fl.v_ref_sd_mps / n);
   fl.v_wheel_sd_mps = std::sqrt(fl.v_wheel_sd_mps / n);
-  if (points > 0) {
-    fl.slip_n = std::sqrt(slip_sq / static_cast<double>(points));
-    fl.slip_sd_ratio = std::sqrt(sd_sq / static_cast<double>(points));
-  }
+  fl.slip_n = std::sqrt(slip_sq / n);
+  fl.slip_sd_ratio = std::sqrt(sd_sq / n);
   return fl;
 }
 
