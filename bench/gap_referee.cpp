@@ -130,14 +130,19 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   std::map<std::string, std::vector<double>> mag_err, after_by_effect;
   std::vector<double> after_over_noise;
   int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0,
-      none_exact = 0;
+      none_exact = 0, refused = 0;
   for (const auto& r : results) {
     const auto& inj = r.truth;
     const std::string said = r.verdict.empty() ? "?" : r.verdict.front();
     ++confusion[inj.effect][said];
+    if (said == "refused") {
+      ++refused;
+      std::cerr << fmt::format("[{}] refused ({} {}): {}\n", cname, inj.effect, inj.magnitude,
+                               r.notes.empty() ? "" : r.notes.front());
+    }
     if (inj.effect == "none") {
       ++n_none;
-      if (said != "none" && said != "unexplained") ++fp_none;
+      if (said != "none" && said != "unexplained" && said != "refused") ++fp_none;
       if (r.exact()) ++none_exact;
       continue;
     }
@@ -179,12 +184,14 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   j["accuracy_effects_exact"] = n_effects ? static_cast<double>(exact_effects) / n_effects : NAN;
   j["false_positive_rate_none"] = n_none ? static_cast<double>(fp_none) / n_none : NAN;
   j["null_exactly_none"] = n_none ? static_cast<double>(none_exact) / n_none : NAN;
+  j["refused"] = refused;
   std::cout << fmt::format(
       "\neffects correct: {}/{} ({:.1f} %; first verdict exactly the injected effect: {:.1f} %), "
-      "false positives on none: {}/{} ({:.1f} %), null sets exactly [\"none\"]: {}/{}\n",
+      "false positives on none: {}/{} ({:.1f} %), null sets exactly [\"none\"]: {}/{}, sets "
+      "refused: {}\n",
       correct_effects, n_effects, 100.0 * correct_effects / std::max(1, n_effects),
       100.0 * exact_effects / std::max(1, n_effects), fp_none, n_none,
-      100.0 * fp_none / std::max(1, n_none), none_exact, n_none);
+      100.0 * fp_none / std::max(1, n_none), none_exact, n_none, refused);
   for (const auto& [e, v] : mag_err) {
     const auto within = std::count_if(v.begin(), v.end(), [](double x) { return x <= 0.25; });
     const double share = static_cast<double>(within) / static_cast<double>(v.size());

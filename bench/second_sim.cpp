@@ -2,7 +2,8 @@
 // CSVs, the tester's export, for `brakefit gap` or anyone else's tool:
 //   second_sim --bench roller|ground --effect none|relaxation_length|... [--magnitude X]
 //              [--seed N] [--ripple R] [--speed-step MPS] [--pressure-filter S]
-//              [--pressure-step BAR] [--jitter RATIO] [--ripple-ref R] --out DIR
+//              [--pressure-step BAR] [--pressure-noise BAR] [--jitter RATIO] [--ripple-ref R]
+//              --out DIR
 // The optional overrides replace the drawn tester export (R: both encoders' relative ripple).
 // Prints the drawn tyre, the truth magnitude and the files written.
 #include <fmt/format.h>
@@ -21,8 +22,8 @@ int main(int argc, char** argv) {
   std::string bench = "roller", effect = "none", out;
   double magnitude = 0;
   std::uint64_t seed = 1;
-  double ripple = -1, speed_step = -1, pressure_filter = -1, pressure_step = -1,
-         jitter = -1, ripple_ref = -1;  // < 0: as drawn
+  double ripple = -1, speed_step = -1, pressure_filter = -1, pressure_step = -1, jitter = -1,
+         ripple_ref = -1, pressure_noise = -1;  // < 0: as drawn
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--bench")
@@ -41,6 +42,8 @@ int main(int argc, char** argv) {
       pressure_filter = std::atof(v.c_str());
     else if (k == "--pressure-step")
       pressure_step = std::atof(v.c_str());
+    else if (k == "--pressure-noise")
+      pressure_noise = std::atof(v.c_str());
     else if (k == "--ripple-ref")
       ripple_ref = std::atof(v.c_str());
     else if (k == "--jitter")
@@ -66,6 +69,7 @@ int main(int argc, char** argv) {
       if (ripple_ref >= 0) r.tester.eccentricity_ref = ripple_ref;
       if (pressure_step >= 0) r.tester.pressure_step_bar = pressure_step;
       if (jitter >= 0) r.tester.jitter_ratio = jitter;
+      if (pressure_noise >= 0) r.tester.pressure_noise_bar = pressure_noise;
     }
     std::filesystem::create_directories(out);
     std::cout << fmt::format("tyre {} Fz {:.0f} N, {:.2f} bar; effect {} magnitude {:.4g}\n",

@@ -281,8 +281,18 @@ gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
 
 TrialResult run_trial(const Injection& inj_in, std::uint64_t seed, const gap::Options& o) {
   Injection inj = inj_in;
-  const gap::Report rep = diagnose_blind(inj.condition, inj, seed, o);
-  return score(inj, rep);
+  try {
+    const gap::Report rep = diagnose_blind(inj.condition, inj, seed, o);
+    return score(inj, rep);
+  } catch (const InputError& e) {
+    // A set the diagnosis refuses is scored as a wrong answer, never dropped from the table.
+    TrialResult r;
+    r.truth = inj;
+    r.verdict = {"refused"};
+    r.notes = {fmt::format("seed {}: {}", seed, e.what())};
+    r.estimate = NAN;
+    return r;
+  }
 }
 
 TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t seed,

@@ -267,15 +267,10 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   }
   if (full.t_s.size() < 20)
     throw InputError(fmt::format("{}: too few samples for a diagnosis", name));
-  // A first-order filter the tester declared on its pressure channel is undone: p = p_f + tau
-  // dp_f/dt (the derivative of the smoothed pressure).
-  if (c.pressure_filter_s > 0 && o.force == pipeline::ForceSource::Pressure) {
-    const auto rate = local_slope(full.t_s, pressure, o.smooth_half_window);
-    for (std::size_t i = 0; i < pressure.size(); ++i) {
-      pressure[i] += c.pressure_filter_s * rate[i];
-      full.force_n[i] = c.brake_gain_n_per_bar * pressure[i];
-    }
-  }
+  // A first-order filter the tester declared on its pressure channel stays in the data: the
+  // model's force is filtered the same way (predict). (Undoing it, p + tau dp/dt, left 3-6 N of
+  // structure on noise-free generator B ground runs: the slope is smeared at the ramp's kink.)
+  if (o.force == pipeline::ForceSource::Pressure) full.pressure_filter_s = c.pressure_filter_s;
   // A quantised speed channel (a tester's export: 0.5-3 mm/s steps) is a staircase whose error
   // is not white where the speed moves slowly: it is rebuilt from its transitions (where the
   // staircase steps, the speed crossed the middle of the two levels), as an encoder's speed is
@@ -389,6 +384,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.wheel_radius_m = full.wheel_radius_m;
   r.brake_gain_n_per_bar = full.brake_gain_n_per_bar;
   r.noise_n = full.noise_n;
+  r.pressure_filter_s = full.pressure_filter_s;
   r.v_ref_sd_mps = full.v_ref_sd_mps;
   r.v_wheel_sd_mps = full.v_wheel_sd_mps;
   r.v_ref_step_mps = full.v_ref_step_mps;
@@ -426,14 +422,25 @@ std::string level_reference_biases(std::vector<Run>& runs) {
   for (const Run& r : runs)
     for (double f : r.force_n) peak = std::max(peak, f);
   std::vector<double> mf(runs.size()), ms(runs.size());
+  // A filtered force channel shows the linear region's force of tau earlier: the slip it is
+  // compared with is taken then (else each ramp rate would level to its own lag).
+  std::vector<std::vector<double>> slips;
+  for (const Run& r : runs) {
+    std::vector<double> s = r.slip;
+    if (r.pressure_filter_s > 0)
+      for (std::size_t i = 0; i < s.size(); ++i)
+        s[i] = interp(r.t_s, r.slip, std::max(r.t_s.front(), r.t_s[i] - r.pressure_filter_s));
+    slips.push_back(std::move(s));
+  }
   double sff = 0, sfs = 0;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const Run& r = runs[k];
+    const std::vector<double>& slip = slips[k];
     double n = 0;
     for (std::size_t i = 0; i < r.slip.size(); ++i)
       if (r.force_n[i] >= 0.05 * peak && r.force_n[i] <= 0.3 * peak) {
         mf[k] += r.force_n[i];
-        ms[k] += r.slip[i];
+        ms[k] += slip[i];
         ++n;
       }
     if (n < 5) return {};
@@ -442,7 +449,7 @@ std::string level_reference_biases(std::vector<Run>& runs) {
     for (std::size_t i = 0; i < r.slip.size(); ++i)
       if (r.force_n[i] >= 0.05 * peak && r.force_n[i] <= 0.3 * peak) {
         sff += (r.force_n[i] - mf[k]) * (r.force_n[i] - mf[k]);
-        sfs += (r.force_n[i] - mf[k]) * (r.slip[i] - ms[k]);
+        sfs += (r.force_n[i] - mf[k]) * (slip[i] - ms[k]);
       }
   }
   if (!(sff > 0)) return {};

@@ -133,6 +133,22 @@ static std::vector<double> relax(const Run& r, const std::vector<double>& k, dou
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wfree-nonheap-object"
 #endif
+void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, double tau_s,
+                        double y0) {
+  // Exact for an input linear between the points: y' = (u - y) / tau over a step dt with u
+  // rising at k = (f1 - f0) / dt gives y1 = f1 - tau k + (y0 - f0 + tau k) exp(-dt / tau).
+  if (f.empty()) return;
+  double f_prev = f[0], y = y0;
+  f[0] = y;
+  for (std::size_t i = 1; i < f.size(); ++i) {
+    const double dt = std::max(t_s[i] - t_s[i - 1], 1e-9);
+    const double k = (f[i] - f_prev) / dt, a = std::exp(-dt / tau_s);
+    y = f[i] - tau_s * k + (y - f_prev + tau_s * k) * a;
+    f_prev = f[i];
+    f[i] = y;
+  }
+}
+
 std::vector<double> predict(const Run& r, const std::vector<double>& p,
                             const std::vector<Effect>& effects) {
   const std::size_t n = r.t_s.size();
@@ -241,6 +257,9 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
     // torque and the measured pressure can be anything up to p0: gain min(p, p0) is added.
     if (threshold) f[i] += std::min(threshold_n, r.force_n[i]);
   }
+  // The filter's state at the run's first point is what the channel showed there (a run can
+  // start on the ramp, less than tau after it began: neither at rest nor settled on it).
+  if (r.pressure_filter_s > 0) filter_first_order(r.t_s, f, r.pressure_filter_s, r.force_n.front());
   return f;
 }
 

@@ -73,9 +73,14 @@ struct Run {
   /// The encoders' rolled angles (rad) since the run's start: speed / radius integrated (the
   /// wheel's, and the roller's or fifth wheel's), for their once-per-revolution ripple.
   std::vector<double> wheel_angle_rad, ref_angle_rad;
-  std::vector<double> ref_decel_mps2;    ///< -d v_ref / dt
+  std::vector<double> ref_decel_mps2;  ///< -d v_ref / dt
   std::vector<double> pressure_rate_bar_per_s;
   double noise_n = 0.0;  ///< measurement noise of the force, estimated before decimation
+  /// A first-order filter the export declared on its pressure channel (s; 0: none). The model's
+  /// force is passed through it (predict), as the transducer's chain passed the true force; the
+  /// data are not undone (a derivative of noisy pressure would be noise, and at the ramp's kink
+  /// a smeared one).
+  double pressure_filter_s = 0.0;
   /// The speed channels' noise (robust scale of second differences, at least step/sqrt(12)) and
   /// quantisation steps (0: not quantised), and the force channel's step, before smoothing.
   double v_ref_sd_mps = 0.0, v_wheel_sd_mps = 0.0;
@@ -109,6 +114,10 @@ struct ConditionOptions {
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o);
 
+/// A first-order filter (time constant tau_s) over f in place, exact for f linear between the
+/// points t_s, from the state y0 at the first point.
+void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, double tau_s,
+                        double y0);
 /// Predicted measured force for parameters {B, C, D, E, then each effect's parameters}.
 std::vector<double> predict(const Run& r, const std::vector<double>& params,
                             const std::vector<Effect>& effects);

@@ -1,0 +1,160 @@
+// Data brakefit did not make: an event file ends at its last row, end decisions on a filtered
+// slip, repeated stamps, quantised speeds rebuilt from their transitions, and the noise floor's
+// two parts (issue 10).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/curve.hpp"
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+#include "core/pipeline/event_csv.hpp"
+#include "core/pipeline/pipeline.hpp"
+
+using namespace brakefit;
+
+namespace {
+
+/// A roller stop as a tester exports it: 1 kHz, speeds quantised to step_mps, the last row just
+/// short of the 27 % switch-off (the tester switched off on its own filtered slip).
+std::string roller_export(double step_mps, double last_slip = 0.266) {
+  std::string csv =
+      "# bench=roller\n# wheel_radius_m=0.3\n# brake_gain_n_per_bar=66.7\n"
+      "t_s,v_ref_mps,v_wheel_mps,pressure_bar\n";
+  const double v_ref = 1.3889;
+  const MfParams tyre{12.0, 1.6, 4000.0, 0.3, 0, 0};
+  const auto peak = mf_peak(tyre, 1.0);
+  double t_past_peak_s = -1.0;
+  for (int i = 0;; ++i) {
+    const double t = i * 1e-3;
+    const double p = std::max(0.0, 25.0 * (t - 0.2));
+    // The slip whose force is gain x pressure (bisection below the peak); past the peak the
+    // wheel runs away at 2 per second until the tester switches off.
+    double lo = 0, hi = peak.slip_ratio;
+    for (int k = 0; k < 60; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (mf_force_n(tyre, mid) < 66.7 * p ? lo : hi) = mid;
+    }
+    if (66.7 * p >= peak.force_n && t_past_peak_s < 0) t_past_peak_s = t;
+    if (t_past_peak_s >= 0) lo = peak.slip_ratio + 2.0 * (t - t_past_peak_s);
+    const double slip = std::min(lo, last_slip);
+    auto q = [&](double v) { return step_mps > 0 ? std::round(v / step_mps) * step_mps : v; };
+    csv += fmt::format("{:.6f},{:.6f},{:.6f},{:.3f}\n", t, q(v_ref), q(v_ref * (1 - slip)), p);
+    if (slip >= last_slip) break;
+  }
+  return csv;
+}
+
+std::vector<pipeline::Event> detect(const pipeline::EventCsv& csv, bool as_file) {
+  pipeline::PipelineOptions o;
+  o.fit = false;
+  pipeline::Pipeline p(csv.calibration, o, nullptr);
+  for (const auto& s : csv.samples) p.feed(s);
+  as_file ? p.finish_file() : p.finish();
+  std::vector<pipeline::Event> out;
+  for (auto& e : p.events()) out.push_back(e.event);
+  return out;
+}
+
+}  // namespace
+
+TEST(OthersData, AnEventFileEndsAtItsLastRowFinishedNotAborted) {
+  const auto csv = pipeline::parse_event_csv(roller_export(0.0), "e.csv");
+  const auto events = detect(csv, true);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].end_reason, "end_of_file");
+  EXPECT_TRUE(events[0].fittable()) << events[0].flags.size();
+  // A log cut mid-stop is still an aborted event.
+  const auto cut = detect(csv, false);
+  ASSERT_EQ(cut.size(), 1u);
+  EXPECT_EQ(cut[0].end_reason, "end_of_data");
+  EXPECT_FALSE(cut[0].fittable());
+  // Without a speed_timing key the speeds of a file from elsewhere are taken at the stamp.
+  EXPECT_EQ(csv.calibration.speed_timing, "instant");
+}
+
+TEST(OthersData, OneNoisySampleAboveTheSwitchOffDoesNotEndTheStop) {
+  pipeline::Calibration c;
+  pipeline::EventDetector d(c, {});
+  std::optional<pipeline::Event> done;
+  std::int64_t t = 0;
+  auto feed = [&](double slip, double p) {
+    pipeline::Sample s;
+    s.t_ns = t += 1'000'000;
+    s.v_ref_mps = 1.39;
+    s.v_wheel_mps = 1.39 * (1 - slip);
+    s.pressure_bar = p;
+    s.state = can::TestState::Measuring;
+    return d.feed(s);
+  };
+  for (int i = 0; i < 300; ++i) ASSERT_FALSE(feed(0.05, 10.0)) << i;
+  EXPECT_FALSE(feed(0.30, 10.0));  // one raw sample past 27 %: the 5 ms mean is not
+  for (int i = 0; i < 3; ++i) EXPECT_FALSE(feed(0.05, 10.0));
+  // A sustained switch-off slip ends it within the 5 ms window.
+  int n = 0;
+  while (!(done = feed(0.30, 10.0))) ASSERT_LT(++n, 6);
+  EXPECT_EQ(done->end_reason, "switch_off_slip");
+}
+
+TEST(OthersData, RepeatedStampsAreSpreadAndABackwardStampNamesItsLine) {
+  const std::string head = "# bench=roller\nt_s,v_ref_mps,v_wheel_mps,pressure_bar\n";
+  const auto csv = pipeline::parse_event_csv(
+      head +
+          "0.000,1.4,1.4,0\n0.001,1.4,1.4,0\n0.001,1.4,1.3,0\n0.001,1.4,1.2,0\n0.004,1.4,1.1,0\n",
+      "r.csv");
+  ASSERT_EQ(csv.samples.size(), 5u);  // no row dropped
+  EXPECT_EQ(csv.repeated_stamps, 2u);
+  EXPECT_EQ(csv.samples[1].t_ns, 1'000'000);
+  EXPECT_EQ(csv.samples[2].t_ns, 2'000'000);
+  EXPECT_EQ(csv.samples[3].t_ns, 3'000'000);
+  EXPECT_DOUBLE_EQ(csv.samples[3].v_wheel_mps, 1.2);  // rows keep their values and order
+  try {
+    pipeline::parse_event_csv(head + "0.002,1.4,1.4,0\n0.001,1.4,1.4,0\n", "b.csv");
+    FAIL() << "a stamp before the previous one must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("b.csv:4:"), std::string::npos) << e.what();
+  }
+}
+
+TEST(OthersData, AQuantisedChannelIsRebuiltFromItsTransitions) {
+  std::vector<double> t, truth, q;
+  const double step = 0.002;
+  for (int i = 0; i < 2000; ++i) {
+    t.push_back(i * 1e-3);
+    truth.push_back(1.39 - 0.15 * t.back() - 0.05 * t.back() * t.back());  // a slowing wheel
+    q.push_back(std::round(truth.back() / step) * step);
+  }
+  const gap::ChannelNoise cn = gap::channel_noise(q);
+  EXPECT_NEAR(cn.step, step, 1e-9);
+  EXPECT_NEAR(cn.sd, step / std::sqrt(12.0), 1e-6);
+  const auto y = gap::dequantise(t, q, step);
+  double err_q = 0, err_y = 0;
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    err_q += (q[i] - truth[i]) * (q[i] - truth[i]);
+    err_y += (y[i] - truth[i]) * (y[i] - truth[i]);
+    ASSERT_LE(std::abs(y[i] - q[i]), 0.5 * step + 1e-12);  // within the level's half step
+  }
+  // Rebuilt from the transitions: measured 11x closer to the truth than the staircase.
+  EXPECT_LT(std::sqrt(err_y / 2000), 0.2 * std::sqrt(err_q / 2000));
+  // A channel that is not quantised is left as it is.
+  std::vector<double> smooth_x;
+  for (double v : truth) smooth_x.push_back(v + 1e-7 * std::sin(1e3 * v));
+  EXPECT_EQ(gap::channel_noise(smooth_x).step, 0.0);
+}
+
+TEST(OthersData, TheFloorCarriesTheSlipNoiseThroughTheSlope) {
+  // A quantised export at 3 mm/s: its slip noise, times the slope of ~77 kN per unit slip, is
+  // part of the floor; an exact export's is not.
+  auto floor_of = [](double step) {
+    const auto csv = pipeline::parse_event_csv(roller_export(step), "e.csv");
+    const auto ev = detect(csv, true);
+    std::vector<gap::Run> runs{gap::condition("a", ev.at(0), csv.calibration, {}),
+                               gap::condition("b", ev.at(0), csv.calibration, {})};
+    return gap::noise_floor(runs, {12.0, 1.6, 4000.0, 0.3});
+  };
+  const gap::Floor exact = floor_of(0.0), coarse = floor_of(0.003);
+  EXPECT_NEAR(coarse.v_wheel_step_mps, 0.003, 1e-9);
+  EXPECT_NEAR(coarse.v_ref_step_mps, 0.003, 1e-9);  // the held roller shows the wheel's step
+  EXPECT_GT(coarse.slip_n, 5 * std::max(exact.slip_n, 0.01));
+  EXPECT_NEAR(coarse.total_n(), std::hypot(coarse.force_n, coarse.slip_n), 1e-9);
+}

@@ -1,0 +1,120 @@
+// The second physics (sim/second, generator B): its .tir reader, its tyres, its export read back
+// as others' data, and the diagnosis on its null sets (issue 10).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/curve.hpp"
+#include "core/pipeline/event_csv.hpp"
+#include "core/pipeline/pipeline.hpp"
+#include "sim/referee.hpp"
+#include "sim/second/generator.hpp"
+#include "sim/second/tir.hpp"
+#include "sim/second/tyre.hpp"
+
+using namespace brakefit;
+
+TEST(Tir, SectionsCommentsStringsAndFortranExponents) {
+  const auto f = sim2::parse_tir(
+      "[MDI_HEADER]\nFILE_TYPE = 'tir'  $ a comment\n! a comment line\n"
+      "[vertical]\nfnomin = 4000 $ N\n[LONGITUDINAL_COEFFICIENTS]\nPCX1 = 1.6\nPKX3=-4.1D-1\n",
+      "t.tir");
+  EXPECT_EQ(f.strings.at("MDI_HEADER").at("FILE_TYPE"), "tir");
+  EXPECT_DOUBLE_EQ(f.at("VERTICAL", "FNOMIN"), 4000.0);
+  EXPECT_DOUBLE_EQ(f.at("LONGITUDINAL_COEFFICIENTS", "PKX3"), -0.41);
+  EXPECT_DOUBLE_EQ(f.get("LONGITUDINAL_COEFFICIENTS", "PEX4", 0.0), 0.0);
+  auto message = [](const std::string& text) {
+    try {
+      sim2::parse_tir(text, "bad.tir");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message("[A]\nKEY = 1.2.3\n").rfind("bad.tir:2:", 0), 0u);
+  EXPECT_EQ(message("KEY = 1\n").rfind("bad.tir:1:", 0), 0u);         // outside a section
+  EXPECT_EQ(message("[A]\nK = 'open\n").rfind("bad.tir:2:", 0), 0u);  // unterminated string
+  EXPECT_EQ(message("[A\n").rfind("bad.tir:1:", 0), 0u);
+  EXPECT_NE(message("[A]\nX = 1\n").find("no error"), std::string::npos);
+  try {
+    f.at("VERTICAL", "MISSING");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("[VERTICAL] MISSING"), std::string::npos);
+  }
+}
+
+TEST(SecondSim, ShippedTyresFollowMf61AtTheirNominalLoad) {
+  const auto& lib = sim2::tyre_library();
+  ASSERT_GE(lib.size(), 4u);
+  for (const auto& t : lib) {
+    sim2::Contact c;
+    c.fz_n = t.fnomin_n;
+    c.pressure_pa = t.nompres_pa;
+    // At Fz0 and the nominal pressure Kx = Fz PKX1 and the peak is PDX1 Fz (shifts aside).
+    EXPECT_NEAR(sim2::mf61_slip_stiffness_n(t, c), t.fnomin_n * t.pkx1, 1e-6 * t.fnomin_n)
+        << t.name;
+    double peak = 0;
+    for (double s = 0.005; s < 0.6; s += 0.001)
+      peak = std::max(peak, sim2::mf61_braking_force_n(t, s, c));
+    EXPECT_NEAR(peak / t.fnomin_n, t.pdx1, 0.02) << t.name;
+  }
+}
+
+TEST(SecondSim, BrushTyreIsStiffAtZeroAndSaturatesAtFriction) {
+  sim2::BrushTyre b;
+  b.cx_n = 80000;
+  b.mu_static = 1.0;
+  b.mu_kinetic = 0.8;
+  EXPECT_NEAR(sim2::brush_braking_force_n(b, 1e-5, 4000, 1.4) / 1e-5, 80000, 100);
+  EXPECT_LT(sim2::brush_braking_force_n(b, 0.9, 4000, 20.0), 0.85 * 4000);  // kinetic at speed
+  EXPECT_NEAR(sim2::brush_braking_force_n(b, 0.5, 4000, 0.0), 4000, 1e-6);  // static at rest
+}
+
+TEST(SecondSim, ItsExportIsReadAsTheEventsItHolds) {
+  for (auto bench : {can::BenchKind::Roller, can::BenchKind::Ground}) {
+    const auto set = sim2::draw_set(bench, "none", 0.0, 3);
+    ASSERT_EQ(set.runs.size(), 3u);
+    const std::string text = sim2::simulate_event_csv(set.runs[0]);
+    EXPECT_NE(text.find("# speed_timing=instant"), std::string::npos);
+    EXPECT_NE(text.find("# pressure_filter_s="), std::string::npos);
+    const auto csv = pipeline::parse_event_csv(text, "b.csv");
+    EXPECT_GT(csv.calibration.pressure_filter_s, 0.0);
+    pipeline::PipelineOptions o;
+    o.fit = false;
+    pipeline::Pipeline p(csv.calibration, o, nullptr);
+    for (const auto& s : csv.samples) p.feed(s);
+    p.finish_file();
+    ASSERT_EQ(p.events().size(), 1u) << can::to_string(bench);
+    EXPECT_TRUE(p.events()[0].event.fittable()) << p.events()[0].event.end_reason;
+  }
+}
+
+TEST(SecondSim, NullSetsOfTheSecondPhysicsSayNone) {
+  // The diagnosis with the shipped (generator A) gates on generator B's null sets: crossed.
+  for (auto cond : {gap::Condition::Roller, gap::Condition::Ground})
+    for (std::uint64_t seed : {1'000'001u, 1'000'004u}) {
+      sim::Injection none;
+      none.condition = cond;
+      none.generator = sim::Generator::B;
+      const auto t = sim::run_trial(none, seed, gap::calibrated_options(cond));
+      EXPECT_EQ(t.verdict, std::vector<std::string>{"none"})
+          << gap::to_string(cond) << " seed " << seed << ": gap " << t.gap_before_n << " N, floor "
+          << t.noise_n << " N";
+    }
+}
+
+TEST(SecondSim, StrongEffectsOfTheSecondPhysicsAreNamed) {
+  // Crossed as well: generator A's gates.
+  for (const auto& [effect, magnitude, cond] :
+       std::vector<std::tuple<std::string, double, gap::Condition>>{
+           {"relaxation_length", 0.3, gap::Condition::Roller},
+           {"brake_threshold", 4.0, gap::Condition::Roller},
+           {"wheel_inertia", 2.0, gap::Condition::Ground}}) {
+    sim::Injection inj{effect, magnitude, cond, sim::Generator::B};
+    const auto t = sim::run_trial(inj, 21, gap::calibrated_options(cond));
+    ASSERT_FALSE(t.verdict.empty());
+    EXPECT_TRUE(t.correct()) << effect << " said " << t.verdict.front();
+    EXPECT_NEAR(t.estimate, magnitude, 0.25 * magnitude) << effect;
+  }
+}
