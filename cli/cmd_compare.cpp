@@ -49,6 +49,7 @@ Side load_side(const std::string& path, const RunOptions& ro, const Model& model
   if (s.files.empty()) throw InputError(path + ": no .log or .csv runs in this directory");
   for (const auto& f : s.files) {
     Run run = process_run(f, ro, &model);
+    leave_out_if_empty(s.left_out, run);
     for (auto& e : run.events) {
       if (!e.event.fittable()) leave_out(s.left_out, run, e.event, flagged_reason(e.event));
       for (auto& r : e.results)

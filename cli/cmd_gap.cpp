@@ -231,6 +231,7 @@ void add_gap_command(CLI::App& app) {
       std::vector<gap::Run> runs;
       for (const auto& f : files) {
         const Run run = process_run(f, o->run, nullptr);
+        leave_out_if_empty(left_out, run);
         for (const auto& e : run.events) {
           if (!e.event.fittable()) {
             leave_out(left_out, run, e.event, flagged_reason(e.event));

@@ -65,6 +65,7 @@ void add_replay_command(CLI::App& app) {
     std::string jsonl;
     std::vector<LeftOut> left_out;  // flagged events: in their JSON (flags) and on stderr
     for (const Run& run : runs) {
+      if (o->json) leave_out_if_empty(left_out, run);  // (the text names it below)
       for (const auto& e : run.events) {
         if (!e.event.fittable()) leave_out(left_out, run, e.event, flagged_reason(e.event));
         const auto doc = event_json(e, run.path, &model);

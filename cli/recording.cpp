@@ -67,6 +67,12 @@ void leave_out(std::vector<LeftOut>& out, const Run& run, const pipeline::Event&
   out.push_back({run.path, e.event_id, reason});
 }
 
+void leave_out_if_empty(std::vector<LeftOut>& out, const Run& run) {
+  if (!run.events.empty()) return;
+  spdlog::warn("{}: left out: no brake event found in it", run.path);
+  out.push_back({run.path, 0, "no brake event found in the file"});
+}
+
 std::string flagged_reason(const pipeline::Event& e) {
   return fmt::format("flagged {} (ended by {})", fmt::join(e.flags, ", "), e.end_reason);
 }

@@ -39,6 +39,8 @@ struct LeftOut {
 /// Records (and logs as a warning) that this event of this run was left out.
 void leave_out(std::vector<LeftOut>& out, const Run& run, const pipeline::Event& e,
                const std::string& reason);
+/// Records (and logs) that a run held no brake event at all (event_id 0 in the JSON).
+void leave_out_if_empty(std::vector<LeftOut>& out, const Run& run);
 /// The reason a flagged event is not fitted: its flags and how it ended.
 std::string flagged_reason(const pipeline::Event& e);
 nlohmann::ordered_json left_out_json(const std::vector<LeftOut>& left_out);

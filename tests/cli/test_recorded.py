@@ -1,7 +1,9 @@
 """Recorded tests: simulate, replay, export, compare, and candump compatibility with can-utils."""
 import glob
 import json
+import math
 import os
+import random
 import shutil
 import subprocess
 import tempfile
@@ -161,6 +163,78 @@ class CanUtilsCompatibility(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+def others_roller_export(rate_bar_per_s, seed, step_mps=0.0005, last_slip=0.266, gain=66.7):
+    """A roller stop as another tester exports it (written here, not by brakefit): 1 kHz, speeds
+    quantised to 0.5 mm/s, pressure with 0.02 bar noise, no speed_timing key, and the last row
+    just short of the 27 % switch-off (the tester switched off on its own filtered slip)."""
+    B, C, D, E = 12.0, 1.6, 4000.0, 0.3
+
+    def mf(s):
+        x = B * s
+        return D * math.sin(C * math.atan(x - E * (x - math.atan(x))))
+
+    peak = max((i / 10000 for i in range(1, 5000)), key=mf)
+    rng = random.Random(seed)
+    q = lambda x: round(x / step_mps) * step_mps
+    rows = ["# bench=roller", "# wheel_radius_m=0.3", f"# brake_gain_n_per_bar={gain}",
+            "t_s,v_ref_mps,v_wheel_mps,pressure_bar"]
+    v, t_past, i = 1.3889, None, 0
+    while True:
+        t = i * 1e-3
+        p = max(0.0, rate_bar_per_s * (t - 0.2))
+        lo, hi = 0.0, peak
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if mf(mid) < gain * p else (lo, mid)
+        if t_past is None and gain * p >= mf(peak):
+            t_past = t
+        if t_past is not None:  # a light wheel runs away; the brake holds the tyre's force
+            lo = peak + 2.0 * (t - t_past)
+        s = min(lo, last_slip)
+        if t_past is not None:
+            p = mf(s) / gain
+        p = max(0.0, p + rng.gauss(0, 0.02))
+        rows.append(f"{t:.6f},{q(v):.6f},{q(v * (1 - s)):.6f},{p:.3f}")
+        if s >= last_slip:
+            return "\n".join(rows) + "\n"
+        i += 1
+
+
+class OthersEventFiles(unittest.TestCase):
+    """Event files brakefit did not write: each is one event, ended by its last row."""
+
+    def test_replay_and_gap_read_them_as_finished_events(self):
+        with tempfile.TemporaryDirectory() as d:
+            runs = [write(d, f"run{k}.csv", others_roller_export(rate, 7 + k))
+                    for k, rate in enumerate((10, 25, 60))]
+            idle = write(d, "idle.csv", "# bench=roller\n# wheel_radius_m=0.3\n"
+                         "t_s,v_ref_mps,v_wheel_mps,pressure_bar\n" +
+                         "".join(f"{i * 1e-3:.3f},1.389,1.389,0.000\n" for i in range(2000)))
+            r = run("replay", "--json", runs[0])
+            self.assertEqual(r.returncode, 0, r.stderr)
+            ev = json.loads(r.stdout.splitlines()[0])
+            self.assertEqual(ev["end_reason"], "end_of_file")
+            self.assertEqual(ev["flags"], [])
+            self.assertAlmostEqual(ev["max_slip_ratio"], 0.266, delta=0.002)
+            r = run("gap", "--json", *runs, idle)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            doc = json.loads(r.stdout)
+            self.assertEqual(len(doc["runs"]), 3)
+            # Nothing dropped silently: the file without an event is named, on stderr and in JSON.
+            self.assertEqual([(x["file"], x["event_id"]) for x in doc["left_out"]], [(idle, 0)])
+            self.assertIn("idle.csv", r.stderr)
+            # The floor's two parts: force noise (0.02 bar x 66.7 N/bar = 1.3 N) and the
+            # quantised speeds' slip noise through the slope.
+            self.assertAlmostEqual(doc["floor"]["force_n"], 1.33, delta=0.4)
+            self.assertGreater(doc["floor"]["slip_n"], 0.0)
+            self.assertAlmostEqual(doc["floor"]["v_wheel_step_mps"], 0.0005, delta=1e-6)
+            self.assertAlmostEqual(doc["floor"]["total_n"],
+                                   math.hypot(doc["floor"]["force_n"], doc["floor"]["slip_n"]), 6)
+            # A Magic Formula tyre with nothing else: the verdict is none, the gap at the floor.
+            self.assertEqual(doc["verdict"], ["none"])
+            self.assertLess(doc["gap_before_rmse_n"], 1.3 * doc["floor"]["total_n"])
 
 
 class Gap(unittest.TestCase):

@@ -158,3 +158,22 @@ TEST(OthersData, TheFloorCarriesTheSlipNoiseThroughTheSlope) {
   EXPECT_GT(coarse.slip_n, 5 * std::max(exact.slip_n, 0.01));
   EXPECT_NEAR(coarse.total_n(), std::hypot(coarse.force_n, coarse.slip_n), 1e-9);
 }
+
+TEST(OthersData, TheModelForceIsFilteredAsTheDeclaredChannelWas) {
+  // A ramp from rest at k per second through a first-order filter: y = k (t - tau (1 - e^-t/tau)).
+  // Uneven points (a decimated run), the filter exact for an input linear between them.
+  const double tau_s = 0.015, k = 200.0 * 66.7;
+  std::vector<double> t, f;
+  for (double x = 0; x < 0.3; x += (t.size() % 3 == 0 ? 0.0007 : 0.0019)) {
+    t.push_back(x);
+    f.push_back(k * x);
+  }
+  gap::filter_first_order(t, f, tau_s, 0.0);
+  for (std::size_t i = 0; i < t.size(); ++i)
+    ASSERT_NEAR(f[i], k * (t[i] - tau_s * (1 - std::exp(-t[i] / tau_s))), 1e-6 * k) << t[i];
+  // A run that starts on the ramp, from the channel's value there: it catches up within tau.
+  std::vector<double> g;
+  for (double x : t) g.push_back(k * (x + 0.01));
+  gap::filter_first_order(t, g, tau_s, k * 0.01);
+  EXPECT_NEAR(g.back(), k * (t.back() + 0.01 - tau_s), 1e-3 * k);
+}
