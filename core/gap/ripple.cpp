@@ -36,7 +36,8 @@ struct RippleFit {
 /// Regresses the residual y on a polynomial trend in time (order trend, kept out of the ripple)
 /// and K (1 - s) cos/sin of the encoders' angles (the reference's with the opposite sign).
 RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vector<double>& gain,
-                     std::array<bool, 2> use, int trend, double frequency_scale = 1.0) {
+                     std::array<bool, 2> use, int trend,
+                     std::array<double, 2> frequency_scale = {1.0, 1.0}) {
   RippleFit out;
   const std::size_t n = r.t_s.size();
   const int enc = static_cast<int>(use[0]) + static_cast<int>(use[1]);
@@ -52,7 +53,8 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vect
     Eigen::Index c = trend + 1;
     for (int e = 0; e < 2; ++e) {
       if (!use[static_cast<std::size_t>(e)]) continue;
-      const double ang = frequency_scale * (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
+      const double ang = frequency_scale[static_cast<std::size_t>(e)] *
+                         (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
       const double sign = e == 0 ? 1.0 : -1.0;
       a(row, c++) = sign * gain[i] * std::cos(ang);
       a(row, c++) = sign * gain[i] * std::sin(ang);
@@ -113,22 +115,30 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
                                   prep[k].revolutions[1] >= kMinRevolutions};
     if (!use[0] && !use[1]) continue;
     fits[k] = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2);
-    // A ripple is narrow-band: at the revolution rate it must stand well above the same fit at
-    // neighbouring rates (a residual left by an unmodelled effect is smooth and broad-band, and
-    // must not be taken for one).
-    // (Compared by the residual they explain beyond the trend: a fit at a low rate over a short
-    // run is ill-conditioned, its coefficients large but its explained variance not.)
-    const double trend_ssr =
-        fit_ripple(runs[k], prep[k].residual, prep[k].gain, {false, false}, 2).ssr;
-    double neighbours = 0;
-    for (const double scale : {0.5, 2.0})
-      neighbours = std::max(
-          neighbours,
-          trend_ssr - fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2, scale).ssr);
-    const bool narrow = trend_ssr - fits[k].ssr > kNarrowBand * neighbours;
+    // A ripple is narrow-band: at its encoder's revolution rate it must stand well above the
+    // same fit at neighbouring rates (a residual left by an unmodelled effect is smooth and
+    // broad-band, and must not be taken for one). Each encoder is checked with the other held at
+    // its own rate: on the ground the fifth wheel turns about 1.7 times as fast as the wheel, so
+    // half its rate is near the wheel's and would take the wheel's ripple for its own.
+    // (Compared by the residual they explain beyond the trend and the other encoder: a fit at a
+    // low rate over a short run is ill-conditioned, its coefficients large but its explained
+    // variance not.)
     for (std::size_t e = 0; e < 2; ++e) {
+      if (!fits[k].used[e]) continue;
+      std::array<bool, 2> other = use;
+      other[e] = false;
+      const double without = fit_ripple(runs[k], prep[k].residual, prep[k].gain, other, 2).ssr;
+      double neighbours = 0;
+      for (const double scale : {0.5, 2.0}) {
+        std::array<double, 2> scales{1.0, 1.0};
+        scales[e] = scale;
+        neighbours = std::max(
+            neighbours,
+            without - fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2, scales).ssr);
+      }
+      const bool narrow = without - fits[k].ssr > kNarrowBand * neighbours;
       const double amp = std::hypot(fits[k].c[e], fits[k].s[e]);
-      if (fits[k].used[e] && narrow && amp > 3 * fits[k].se[e] && amp < 0.01)
+      if (narrow && amp > 3 * fits[k].se[e] && amp < 0.01)
         amps[e].push_back(amp);
       else
         fits[k].used[e] = false;
