@@ -91,6 +91,20 @@ std::vector<Range> ranges(gap::Condition c, Generator g) {
   return out;
 }
 
+/// The fittable events a pipeline found, conditioned for the diagnosis; an event with too few
+/// quasi-static samples is skipped (the diagnosis works with the others, or refuses fewer than
+/// two).
+void append_conditioned(std::vector<gap::Run>& out, const std::string& name, pipeline::Pipeline& p,
+                        const pipeline::Calibration& c) {
+  for (const auto& e : p.events()) {
+    if (!e.event.fittable()) continue;
+    try {
+      out.push_back(gap::condition(name, e.event, c, {}));
+    } catch (const InputError&) {
+    }
+  }
+}
+
 }  // namespace
 
 const std::vector<std::string>& referee_effects(gap::Condition c, Generator g) {
@@ -164,14 +178,7 @@ std::vector<gap::Run> simulate_runs(const Scenario& base, std::uint64_t seed, Mf
     pipeline::Pipeline p(r.calibration, o, nullptr);
     for (const auto& f : r.frames) p.feed(f);
     p.finish();
-    for (const auto& e : p.events()) {
-      if (!e.event.fittable()) continue;
-      try {
-        out.push_back(gap::condition(ramp, e.event, r.calibration, {}));
-      } catch (const InputError&) {
-        // too few quasi-static samples in this run: the diagnosis works with the others
-      }
-    }
+    append_conditioned(out, ramp, p, r.calibration);
   }
   return out;
 }
@@ -235,14 +242,7 @@ std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed) {
     pipeline::Pipeline p(csv.calibration, o, nullptr);
     for (const auto& smp : csv.samples) p.feed(smp);
     p.finish_file();
-    for (const auto& e : p.events()) {
-      if (!e.event.fittable()) continue;
-      try {
-        out.push_back(gap::condition(name, e.event, csv.calibration, {}));
-      } catch (const InputError&) {
-        // too few samples: the diagnosis works with the others
-      }
-    }
+    append_conditioned(out, name, p, csv.calibration);
   }
   return out;
 }
