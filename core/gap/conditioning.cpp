@@ -34,7 +34,7 @@ double smoothed_noise_sd(const std::vector<double>& x, int half_window) {
   // the anti-correlated error of edge-timed frame means (consecutive frames share an edge) and
   // the correlated error of a rebuilt staircase each count as what they leave.
   const int wide = 3 * half_window;
-  if (half_window <= 0 || x.size() < static_cast<std::size_t>(4 * wide + 10)) return 0.0;
+  if (half_window <= 0 || x.size() < 4 * static_cast<std::size_t>(wide) + 10) return 0.0;
   const auto a = smooth(x, half_window), b = smooth(x, wide);
   std::vector<double> d;
   for (std::size_t i = static_cast<std::size_t>(wide);
@@ -50,8 +50,8 @@ double smoothed_noise_sd(const std::vector<double>& x, int half_window) {
   double aa = 0, ab = 0, bb = 0;
   for (double w : wa) aa += w * w;
   for (double w : wb) bb += w * w;
-  for (int k = -half_window; k <= half_window; ++k)
-    ab += wa[static_cast<std::size_t>(k + half_window)] * wb[static_cast<std::size_t>(k + wide)];
+  for (std::size_t k = 0; k < wa.size(); ++k)  // wa's k-th weight sits at wide - half_window + k
+    ab += wa[k] * wb[k + static_cast<std::size_t>(wide - half_window)];
   return sd_d * std::sqrt(aa / std::max(aa - 2 * ab + bb, 1e-12));
 }
 
