@@ -103,31 +103,6 @@ double smoothing_noise_gain(int half_window) {
   return std::sqrt(3 * (3 * m * m + 3 * m - 1) / ((2 * m - 1) * (2 * m + 1) * (2 * m + 3)));
 }
 
-std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& x,
-                                int half_window) {
-  // Least-squares slope over 2 hw + 1 samples, the window shifted (not shrunk) at the ends: a
-  // shrunken window differentiates the raw noise at the last samples.
-  const auto n = static_cast<long>(x.size());
-  const long w = std::min<long>(half_window, (n - 1) / 2);
-  std::vector<double> d(x.size(), 0.0);
-  for (long i = 0; i < n; ++i) {
-    const long a = std::clamp(i - w, 0L, std::max(0L, n - 1 - 2 * w)),
-               b = std::min(n - 1, a + 2 * w);
-    double st = 0, sx = 0, stt = 0, stx = 0, m = 0;
-    for (long k = a; k <= b; ++k) {
-      const double tk = t[static_cast<std::size_t>(k)] - t[static_cast<std::size_t>(i)];
-      st += tk;
-      sx += x[static_cast<std::size_t>(k)];
-      stt += tk * tk;
-      stx += tk * x[static_cast<std::size_t>(k)];
-      ++m;
-    }
-    const double den = m * stt - st * st;
-    d[static_cast<std::size_t>(i)] = den > 0 ? (m * stx - st * sx) / den : 0.0;
-  }
-  return d;
-}
-
 std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
                                double step) {
   // Anchors: where the level changes between samples i-1 and i, the signal crossed the middle of

@@ -127,12 +127,6 @@ static std::vector<double> relax(const Run& r, const std::vector<double>& k, dou
   return y;
 }
 
-// GCC 12 at -O3 reports a bogus -Wfree-nonheap-object on the inlined vector destructors of this
-// function (GCC bug 108088-like false positive; ASan finds nothing).
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wfree-nonheap-object"
-#endif
 void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, double tau_s,
                         double y0) {
   // Exact for an input linear between the points: y' = (u - y) / tau over a step dt with u
@@ -149,6 +143,12 @@ void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, 
   }
 }
 
+// GCC 12 at -O3 reports a bogus -Wfree-nonheap-object on the inlined vector destructors of this
+// function (GCC bug 108088-like false positive; ASan finds nothing).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wfree-nonheap-object"
+#endif
 std::vector<double> predict(const Run& r, const std::vector<double>& p,
                             const std::vector<Effect>& effects) {
   const std::size_t n = r.t_s.size();

@@ -16,9 +16,6 @@ inline constexpr double kLongVl = 16.7;
 std::vector<double> smooth(const std::vector<double>& x, int half_window);
 /// Central differences (one-sided at the ends).
 std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x);
-/// Least-squares slope over 2 half_window + 1 samples, the window shifted (not shrunk) at the ends.
-std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& x,
-                                int half_window);
 /// Linear interpolation of x(t) at `at`, held at the ends.
 double interp(const std::vector<double>& t, const std::vector<double>& x, double at);
 
