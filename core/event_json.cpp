@@ -1,5 +1,8 @@
 #include "core/event_json.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "brakefit/version.hpp"
 
 namespace brakefit {
@@ -50,6 +53,9 @@ nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::str
   j["flags"] = e.event.flags;
   j["points"] = e.curve.size();
   j["max_slip_ratio"] = num(e.curve.max_slip_ratio());
+  double max_force_n = std::nan("");
+  for (double f : e.curve.force_n) max_force_n = std::isnan(max_force_n) ? f : std::max(max_force_n, f);
+  j["max_force_n"] = num(max_force_n);
   j["mape_rule"] = kMapeRule;
   j["results"] = nlohmann::ordered_json::array();
   for (const auto& r : e.results) j["results"].push_back(result_json(r));

@@ -137,14 +137,17 @@ void parse_pipeline(const TomlReader& rd, const toml::table& t, Config& c) {
 void parse_tcp(const TomlReader& rd, const toml::table& t, Config& c) {
   const std::string p = "modbus_tcp.";
   rd.check_keys(t, p,
-                {"address", "port", "max_clients", "writable", "write_allow", "idle_timeout_s"});
+                {"address", "port", "max_clients", "max_clients_per_address", "writable",
+                 "write_allow", "idle_timeout_s"});
   auto& m = c.modbus_tcp;
   m.address = rd.string(t, p, "address", m.address);
   in_addr a{};
   if (inet_pton(AF_INET, m.address.c_str(), &a) != 1)
     rd.fail(p + "address", "expected an IPv4 address such as 0.0.0.0 or 127.0.0.1");
   m.port = static_cast<int>(rd.integer(t, p, "port", m.port, 0, 65535));
-  m.max_clients = static_cast<int>(rd.integer(t, p, "max_clients", m.max_clients, 1, 1000));
+  m.max_clients = static_cast<int>(rd.integer(t, p, "max_clients", m.max_clients, 2, 1000));
+  m.max_clients_per_address = static_cast<int>(
+      rd.integer(t, p, "max_clients_per_address", m.max_clients_per_address, 1, 1000));
   m.writable = rd.boolean(t, p, "writable", m.writable);
   m.write_allow = string_list(rd, t, p, "write_allow");
   for (const auto& ip : m.write_allow)
@@ -155,7 +158,9 @@ void parse_tcp(const TomlReader& rd, const toml::table& t, Config& c) {
 
 void parse_store(const TomlReader& rd, const toml::table& t, Config& c) {
   const std::string p = "store.";
-  rd.check_keys(t, p, {"path", "retention_days", "max_events", "min_free_mb", "store_samples"});
+  rd.check_keys(t, p,
+                {"path", "retention_days", "max_events", "min_free_mb", "store_samples",
+                 "hold_in_memory", "max_held", "retry_max_s"});
   auto& s = c.store;
   s.path = rd.string(t, p, "path", s.path);
   if (s.path.empty()) rd.fail(p + "path", "must not be empty");
@@ -163,6 +168,11 @@ void parse_store(const TomlReader& rd, const toml::table& t, Config& c) {
   s.max_events = static_cast<int>(rd.integer(t, p, "max_events", s.max_events, 1, 100'000'000));
   s.min_free_mb = rd.number(t, p, "min_free_mb", s.min_free_mb, 0, 1e7);
   s.store_samples = rd.boolean(t, p, "store_samples", s.store_samples);
+  s.hold_in_memory =
+      static_cast<int>(rd.integer(t, p, "hold_in_memory", s.hold_in_memory, 0, 10000));
+  s.max_held = static_cast<int>(rd.integer(t, p, "max_held", s.max_held, 1, 100000));
+  if (s.max_held < s.hold_in_memory) rd.fail(p + "max_held", "must be at least hold_in_memory");
+  s.retry_max_s = rd.number(t, p, "retry_max_s", s.retry_max_s, 0.01, 3600);
 }
 
 void parse_record(const TomlReader& rd, const toml::table& t, Config& c) {

@@ -18,6 +18,9 @@ struct ModbusTcpConfig {
   std::string address = "0.0.0.0";
   int port = 1502;
   int max_clients = 128;
+  /// One address may hold at most this many connections; a new address always gets a slot (the
+  /// idlest connection of the address holding most is evicted for it).
+  int max_clients_per_address = 16;
   bool writable = false;                   ///< command holding registers accept writes
   std::vector<std::string> write_allow{};  ///< client IPv4 addresses allowed to write
   double idle_timeout_s = 60;              ///< an idle (or trickling) client is dropped after this
@@ -29,6 +32,11 @@ struct StoreConfig {
   int max_events = 100000;
   double min_free_mb = 64;  ///< below this, raw samples stop being stored (results are kept)
   bool store_samples = true;
+  /// While commits fail, finished events wait unpublished: this many in memory, the rest spilled
+  /// to PATH.spill/ (0: every waiting event is spilled at once, so a kill -9 loses none).
+  int hold_in_memory = 0;
+  int max_held = 256;        ///< in memory when spilling fails too; older ones are dropped, counted
+  double retry_max_s = 5.0;  ///< commit retries back off from 0.1 s to this
 };
 
 struct RecordConfig {

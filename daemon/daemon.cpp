@@ -17,6 +17,7 @@
 
 #include "core/event_json.hpp"
 #include "core/model_io.hpp"
+#include "daemon/event_block.hpp"
 #include "drivers/socketcan.hpp"
 
 namespace brakefit::daemon {
@@ -41,16 +42,6 @@ int channel_of(std::uint32_t id) {
   }
 }
 
-std::uint32_t hash_prefix(const std::string& hash) {
-  const auto colon = hash.find(':');
-  const std::string hex = hash.substr(colon == std::string::npos ? 0 : colon + 1, 8);
-  try {
-    return static_cast<std::uint32_t>(std::stoul(hex, nullptr, 16));
-  } catch (...) {
-    return 0;
-  }
-}
-
 void set_log_level(const std::string& l) {
   spdlog::set_level(spdlog::level::from_str(l));
 }
@@ -66,9 +57,9 @@ std::vector<std::uint32_t> layout_ids() {
 Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
     : config_path_(std::move(config_path)), cfg_(std::move(cfg)), sig_(sig) {
   set_log_level(cfg_.log_level);
-  open_model();
+  model_ = load_model(cfg_.model_path);
   try {
-    store_ = std::make_unique<EventStore>(cfg_.store, false);
+    store_ = std::make_unique<EventStore>(cfg_.store, false, kStoreBusyTimeoutMs);
   } catch (const std::exception& e) {
     throw DaemonError(kExitCantCreate, e.what());
   }
@@ -106,7 +97,14 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
     }
   }
   pipeline_ = std::make_unique<pipeline::Pipeline>(cfg_.calibration, cfg_.pipeline,
-                                                   model_ ? &*model_ : nullptr);
+                                                   model_.get());
+  pending_ = std::make_unique<PendingEvents>(cfg_.store.path + ".spill",
+                                             static_cast<std::size_t>(cfg_.store.hold_in_memory),
+                                             static_cast<std::size_t>(cfg_.store.max_held));
+  if (const auto n = pending_->adopt_spilled())
+    spdlog::warn("{} event(s) spilled by an earlier run wait in {}: committing them first", n,
+                 pending_->dir());
+  restore_last_event();
   server_->start();
   spdlog::info("brakefitd: source {}, Modbus TCP on {}:{} ({}), store {}", source_->describe(),
                cfg_.modbus_tcp.address, server_->port(),
@@ -117,14 +115,13 @@ Daemon::~Daemon() {
   if (server_) server_->stop();
 }
 
-void Daemon::open_model() {
-  model_.reset();
-  if (cfg_.model_path.empty()) {
+std::unique_ptr<const Model> Daemon::load_model(const std::string& path) {
+  if (path.empty()) {
     spdlog::warn("no model configured: only the lm method runs");
-    return;
+    return nullptr;
   }
   try {
-    model_ = deserialize_model(read_text_file(cfg_.model_path), cfg_.model_path);
+    return std::make_unique<const Model>(deserialize_model(read_text_file(path), path));
   } catch (const std::exception& e) {
     throw DaemonError(kExitConfig, fmt::format("{} (key 'daemon.model')", e.what()));
   }
@@ -147,6 +144,7 @@ std::uint16_t Daemon::status_flags(Clock::time_point now) const {
   if (pipeline_->event_active()) f |= kStatusEventActive;
   if (store_->degraded()) f |= kStatusStoreDegraded;
   if (store_error_) f |= kStatusStoreError;
+  if (pending_->size() > 0) f |= kStatusEventsWaiting;
   if (recorder_error_) f |= kStatusRecorderError;
   if (cfg_.modbus_tcp.writable) f |= kStatusWritable;
   return f;
@@ -168,6 +166,12 @@ void Daemon::post_status(Clock::time_point now) {
   w.u32("counter_gaps", static_cast<std::uint32_t>(st.counter_gaps));
   w.u32("unknown_ids", static_cast<std::uint32_t>(st.unknown_ids));
   w.u32("queue_drops", static_cast<std::uint32_t>(c.queue_drops.load()));
+  w.u16("events_waiting",
+        static_cast<std::uint16_t>(std::min<std::size_t>(pending_->size(), 65535)));
+  w.u16("events_spilled",
+        static_cast<std::uint16_t>(std::min<std::size_t>(pending_->spilled(), 65535)));
+  w.u32("store_failures", static_cast<std::uint32_t>(store_failures_));
+  w.u32("events_lost", static_cast<std::uint32_t>(pending_->lost()));
   const double nan = std::nan("");
   const auto& s = pipeline_->last_sample();
   w.f32("v_ref_mps", s ? s->v_ref_mps : nan);
@@ -185,9 +189,12 @@ void Daemon::notify_status() {
   if (f & kStatusWheelEncoderMissing) missing.push_back("wheel encoder");
   if (f & kStatusPressureMissing) missing.push_back("pressure");
   std::string s =
-      fmt::format("{} events; {}; sensors {}{}{}", events_finished_, source_->describe(),
+      fmt::format("{} events; {}; sensors {}{}{}{}", events_finished_, source_->describe(),
                   missing.empty() ? "ok" : fmt::format("missing: {}", fmt::join(missing, ", ")),
                   store_->degraded() ? "; store degraded (samples not stored)" : "",
+                  pending_->size() ? fmt::format("; {} event(s) waiting for the store",
+                                                 pending_->size())
+                                   : "",
                   source_finished_ ? "; replay finished" : "");
   if (s == last_status_) return;
   last_status_ = s;
@@ -195,73 +202,76 @@ void Daemon::notify_status() {
 }
 
 void Daemon::publish_finished(Clock::time_point closed) {
-  for (auto& er : pipeline_->take_events()) {
-    const Model* model = model_ ? &*model_ : nullptr;
+  auto finished = pipeline_->take_events();
+  if (finished.empty()) return;
+  for (auto& er : finished) {
+    const Model* model = model_.get();
     auto doc = event_json(er, source_->describe(), model);
     doc["vehicle_id"] = vehicle_id_;
-    const std::string hash = model ? model->hash : "";
-    // 1. durable first
-    const auto t_fitted = Clock::now();
-    bool samples_stored = false;
-    const auto id =
-        store_->commit(er, doc.dump(), pipeline::format_calibration(cfg_.calibration), vehicle_id_,
-                       source_->describe(), hash, unix_now(), &samples_stored);
-    if (!id) {
-      store_error_ = true;
-      spdlog::error("{}", store_->error());
-    }
-    // 2. then published: seq_begin first, the body, seq last
-    std::uint16_t flags = 0;
-    for (const auto& f : er.event.flags) {
-      if (f == "too_short") flags |= kFlagTooShort;
-      if (f == "aborted") flags |= kFlagAborted;
-      if (f == "sensor_fault") flags |= kFlagSensorFault;
-    }
-    if (er.results.empty()) flags |= kFlagNotFitted;
-    if (id && !samples_stored) flags |= kFlagSamplesNotStored;
-    ++seq_;
-    RegisterWrites w;
-    w.u16("event.seq_begin", seq_);
-    w.u32("event.id", static_cast<std::uint32_t>(id.value_or(0)));
-    w.u16("event.bench", static_cast<std::uint16_t>(er.event.bench));
-    w.u16("event.flags", flags);
-    w.u16("event.end_reason", end_reason_code(er.event.end_reason));
-    w.u32("event.duration_ms",
-          static_cast<std::uint32_t>((er.event.t_end_ns - er.event.t_start_ns) / 1'000'000));
-    w.u16("event.points",
-          static_cast<std::uint16_t>(std::min<std::size_t>(er.curve.size(), 65535)));
-    double peak_force = std::nan("");
-    for (double fn : er.curve.force_n)
-      peak_force = std::isnan(peak_force) ? fn : std::max(peak_force, fn);
-    w.f32("event.peak_force_n", peak_force);
-    w.f32("event.peak_slip_ratio", er.curve.size() ? er.curve.max_slip_ratio() : std::nan(""));
-    w.u32("event.model_hash", hash_prefix(hash));
-    w.u32("event.t_end_unix_s", static_cast<std::uint32_t>(er.event.t_end_ns / 1'000'000'000));
-    const char* fields[6] = {"B", "C", "D", "E", "mape_pct", "rmse_n"};
-    for (const char* m : kMethodBlocks) {
-      const MethodResult* r = nullptr;
-      for (const auto& x : er.results)
-        if (to_string(x.method) == std::string(m)) r = &x;
-      const double v[6] = {r ? r->params.B : NAN,         r ? r->params.C : NAN,
-                           r ? r->params.D : NAN,         r ? r->params.E : NAN,
-                           r ? r->metrics.mape_pct : NAN, r ? r->metrics.rmse_n : NAN};
-      for (int i = 0; i < 6; ++i) w.f32(fmt::format("event.{}.{}", m, fields[i]).c_str(), v[i]);
-    }
-    w.u16("event.seq", seq_);
-    server_->post(std::move(w), closed);
-    spdlog::debug("event {}: fit {:.2f} ms, store {:.2f} ms", id.value_or(0),
-                  std::chrono::duration<double, std::milli>(t_fitted - closed).count(),
-                  std::chrono::duration<double, std::milli>(Clock::now() - t_fitted).count());
     ++events_finished_;
     if (!er.event.flags.empty()) ++events_flagged_;
     const MethodResult* best = er.results.empty() ? nullptr : &er.results.back();
     spdlog::info(
-        "event {} ({}): {} points, ended by {}{}{}", id.value_or(0), can::to_string(er.event.bench),
-        er.curve.size(), er.event.end_reason,
+        "event {} ({}): {} points, ended by {}{}{}", er.event.event_id,
+        can::to_string(er.event.bench), er.curve.size(), er.event.end_reason,
         er.event.flags.empty() ? "" : fmt::format(" [{}]", fmt::join(er.event.flags, ",")),
         best ? fmt::format(", {} B {:.3f} C {:.4f} D {:.1f} E {:.4f}", to_string(best->method),
                            best->params.B, best->params.C, best->params.D, best->params.E)
              : "");
+    pending_->push(make_record(er, doc.dump(), pipeline::format_calibration(cfg_.calibration),
+                               vehicle_id_, source_->describe(), model ? model->hash : "",
+                               unix_now()));
+  }
+  commit_pending(closed, true);
+}
+
+void Daemon::commit_pending(Clock::time_point closed, bool fresh) {
+  const auto now = Clock::now();
+  if (pending_->size() == 0 || (!fresh && now < next_retry_)) return;
+  while (const EventRecord* r = pending_->front()) {
+    const bool spilled = pending_->front_is_spilled();
+    bool samples_stored = false;
+    std::optional<std::int64_t> id;
+    if (spilled) {
+      if ((id = store_->find(*r))) samples_stored = store_->get(*id)->samples_stored;
+    }
+    if (!id) id = store_->commit(*r, &samples_stored);
+    if (!id) {
+      // 1. durable first: not stored, so not published. Retried with a backoff.
+      ++store_failures_;
+      if (!store_error_ || retry_delay_s_ >= cfg_.store.retry_max_s)
+        spdlog::error("{}; {} event(s) waiting, retrying", store_->error(), pending_->size());
+      store_error_ = true;
+      pending_->spill_excess();
+      next_retry_ = now + std::chrono::duration_cast<Clock::duration>(
+                              std::chrono::duration<double>(retry_delay_s_));
+      retry_delay_s_ = std::min(retry_delay_s_ * 2.0, cfg_.store.retry_max_s);
+      return;
+    }
+    if (store_error_) spdlog::info("store works again: event {} committed", *id);
+    store_error_ = false;
+    retry_delay_s_ = 0.1;
+    // 2. then published: the block is built from what was stored.
+    try {
+      server_->post(event_block(r->result_json, *id, samples_stored), closed);
+    } catch (const std::exception& e) {
+      spdlog::error("event {}: stored but its block cannot be built: {}", *id, e.what());
+    }
+    spdlog::debug("event {} stored and published {:.2f} ms after it closed", *id,
+                  std::chrono::duration<double, std::milli>(Clock::now() - closed).count());
+    pending_->pop();
+  }
+}
+
+void Daemon::restore_last_event() {
+  const auto last = store_->last();
+  if (!last) return;
+  try {
+    server_->post(event_block(last->result_json, last->id, last->samples_stored));
+    spdlog::info("last stored event {} restored into the registers (seq {})", last->id,
+                 event_seq(last->id));
+  } catch (const std::exception& e) {
+    spdlog::warn("last stored event {} cannot be shown in the registers: {}", last->id, e.what());
   }
 }
 
@@ -281,14 +291,19 @@ void Daemon::reload() {
     next.modbus_tcp.port = cfg_.modbus_tcp.port;
     next.modbus_tcp.address = cfg_.modbus_tcp.address;
     next.store.path = cfg_.store.path;
-    const bool model_changed = next.model_path != cfg_.model_path;
+    // Everything new is built aside; nothing running is touched until all of it has loaded.
+    // The model is re-read even when its path is unchanged: a retrained file may sit there.
+    auto next_model = load_model(next.model_path);
+    auto next_pipeline =
+        std::make_unique<pipeline::Pipeline>(next.calibration, next.pipeline, next_model.get());
+    // Swap (nothing below throws): the old pipeline goes before the model it points into.
+    pipeline_ = std::move(next_pipeline);
+    model_ = std::move(next_model);
     cfg_ = std::move(next);
     set_log_level(cfg_.log_level);
-    if (model_changed) open_model();
     server_->set_write_policy(cfg_.modbus_tcp.writable, cfg_.modbus_tcp.write_allow);
-    pipeline_ = std::make_unique<pipeline::Pipeline>(cfg_.calibration, cfg_.pipeline,
-                                                     model_ ? &*model_ : nullptr);
-    spdlog::info("reloaded {}", config_path_);
+    spdlog::info("reloaded {}{}", config_path_,
+                 model_ ? fmt::format(" (model {})", model_->hash) : "");
   } catch (const std::exception& e) {
     spdlog::error("reload failed, keeping the running configuration: {}", e.what());
   }
@@ -299,6 +314,7 @@ void Daemon::reload() {
 
 int Daemon::run() {
   start_ = Clock::now();
+  commit_pending(start_, true);  // events spilled by an earlier run go first
   std::uint64_t watchdog_us = 0;
   if (sd_watchdog_enabled(0, &watchdog_us) <= 0) watchdog_us = 0;
   sd_notify(0, "READY=1");
@@ -330,6 +346,7 @@ int Daemon::run() {
       if (cfg_.exit_at_end) break;
     }
     const auto now = Clock::now();
+    commit_pending(now, false);
     if (paced && pipeline_->event_active()) {
       for (int ch = 0; ch < 3; ++ch) {
         const auto last = seen_[static_cast<std::size_t>(ch)].value_or(start_);
@@ -384,6 +401,12 @@ int Daemon::run() {
   if (pipeline_->event_active()) {
     pipeline_->abort("shutdown");
     publish_finished(Clock::now());
+  }
+  commit_pending(Clock::now(), true);
+  if (pending_->size() > 0) {
+    pending_->spill_all();
+    spdlog::warn("stopping with {} event(s) not stored: spilled to {} ({} still in memory)",
+                 pending_->size(), pending_->dir(), pending_->size() - pending_->spilled());
   }
   if (recorder_) recorder_->flush();
   post_status(Clock::now());

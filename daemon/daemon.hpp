@@ -10,6 +10,7 @@
 #include "core/exit_codes.hpp"
 #include "daemon/config.hpp"
 #include "daemon/modbus_server.hpp"
+#include "daemon/pending.hpp"
 #include "daemon/store.hpp"
 #include "drivers/replay.hpp"
 
@@ -18,6 +19,9 @@ namespace brakefit::daemon {
 /// Exit codes: 69 a configured source is absent, 71 cannot listen, 73 cannot open the store,
 /// 78 configuration invalid (core/exit_codes.hpp); DaemonError carries one.
 using DaemonError = ExitError;
+
+/// One commit waits this long for another process's lock, then the loop goes on and retries.
+inline constexpr int kStoreBusyTimeoutMs = 100;
 
 /// Set from signal handlers.
 struct Signals {
@@ -35,9 +39,13 @@ class Daemon {
 
  private:
   using Clock = std::chrono::steady_clock;
-  void open_model();
+  static std::unique_ptr<const Model> load_model(const std::string& path);
   void reload();
   void publish_finished(Clock::time_point closed);
+  /// Commits waiting events oldest first and publishes each after its commit; on a failure
+  /// stops and retries later (fresh: an event just finished, try now whatever the backoff).
+  void commit_pending(Clock::time_point closed, bool fresh);
+  void restore_last_event();
   void post_status(Clock::time_point now);
   void notify_status();
   std::uint16_t status_flags(Clock::time_point now) const;
@@ -46,15 +54,17 @@ class Daemon {
   std::string config_path_;
   Config cfg_;
   Signals& sig_;
-  std::optional<Model> model_;
+  std::unique_ptr<const Model> model_;  ///< stable address: the pipeline points into it
   std::unique_ptr<EventStore> store_;
+  std::unique_ptr<PendingEvents> pending_;
   std::unique_ptr<ModbusServer> server_;
   std::unique_ptr<drivers::FrameSource> source_;
   std::unique_ptr<drivers::CandumpRecorder> recorder_;
   std::unique_ptr<pipeline::Pipeline> pipeline_;
   std::string vehicle_id_;
-  std::uint16_t seq_ = 0;
-  std::uint64_t events_finished_ = 0, events_flagged_ = 0;
+  std::uint64_t events_finished_ = 0, events_flagged_ = 0, store_failures_ = 0;
+  double retry_delay_s_ = 0.1;
+  Clock::time_point next_retry_{};
   bool recorder_error_ = false, store_error_ = false, source_finished_ = false;
   bool reload_pending_ = false;
   Clock::time_point start_;

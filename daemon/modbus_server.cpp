@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <modbus.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -17,6 +18,8 @@
 #include <limits>
 #include <list>
 #include <stdexcept>
+
+#include "daemon/admission.hpp"
 
 namespace brakefit::daemon {
 
@@ -177,6 +180,9 @@ void ModbusServer::apply_pending() {
   const auto ex = pack_u32(static_cast<std::uint32_t>(stats_.exceptions + stats_.malformed));
   m->tab_input_registers[reg("modbus_exceptions").address] = ex[0];
   m->tab_input_registers[reg("modbus_exceptions").address + 1] = ex[1];
+  const auto rj = pack_u32(static_cast<std::uint32_t>(stats_.rejected.load()));
+  m->tab_input_registers[reg("modbus_rejected").address] = rj[0];
+  m->tab_input_registers[reg("modbus_rejected").address + 1] = rj[1];
 }
 
 bool ModbusServer::handle(Client& c) {
@@ -260,6 +266,21 @@ bool ModbusServer::handle(Client& c) {
   return true;
 }
 
+void ModbusServer::note_rejection(const std::string& what) {
+  ++stats_.rejected;
+  // A flood of connections must not flood the journal: at most one line a second, with a count.
+  const auto now = Clock::now();
+  ++rejections_unlogged_;
+  if (now - last_rejection_log_ < std::chrono::seconds(1)) return;
+  spdlog::warn("modbus_tcp: {}{}", what,
+               rejections_unlogged_ > 1
+                   ? fmt::format(" ({} refusals/evictions since the last message)",
+                                 rejections_unlogged_)
+                   : "");
+  rejections_unlogged_ = 0;
+  last_rejection_log_ = now;
+}
+
 void ModbusServer::run() {
   std::list<Client> clients;
   const auto idle = std::chrono::duration<double>(cfg_.idle_timeout_s);
@@ -304,15 +325,27 @@ void ModbusServer::run() {
         const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &len,
                                  SOCK_NONBLOCK | SOCK_CLOEXEC);
         if (fd < 0) break;
-        if (static_cast<int>(clients.size()) >= cfg_.max_clients) {
-          ++stats_.rejected;
+        char ip[INET_ADDRSTRLEN] = {};
+        inet_ntop(AF_INET, &peer.sin_addr, ip, sizeof ip);
+        std::vector<ConnectionView> open;
+        open.reserve(clients.size());
+        for (const auto& c : clients) open.push_back({c.ip, c.last_byte});
+        const Admission a =
+            admit_connection(open, ip, cfg_.max_clients, cfg_.max_clients_per_address);
+        if (a.evict) {
+          auto victim = std::next(clients.begin(), static_cast<std::ptrdiff_t>(*a.evict));
+          note_rejection(fmt::format("evicted {} for {} ({})", victim->ip, ip, a.reason));
+          ::close(victim->fd);
+          clients.erase(victim);
+          --stats_.clients;
+        }
+        if (!a.admit) {
+          note_rejection(fmt::format("refused {} ({})", ip, a.reason));
           ::close(fd);
           continue;
         }
         const int on = 1;
         ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, sizeof on);
-        char ip[INET_ADDRSTRLEN] = {};
-        inet_ntop(AF_INET, &peer.sin_addr, ip, sizeof ip);
         clients.push_back({fd, ip, {}, Clock::now(), std::nullopt});
         ++stats_.clients;
       }

@@ -23,7 +23,7 @@ struct ServerStats {
   std::atomic<std::uint64_t> requests{0};
   std::atomic<std::uint64_t> exceptions{0};  ///< exception replies
   std::atomic<std::uint64_t> malformed{0};   ///< bad MBAP header: connection closed
-  std::atomic<std::uint64_t> rejected{0};    ///< connections over max_clients
+  std::atomic<std::uint64_t> rejected{0};    ///< connections refused or evicted (admission.hpp)
   std::atomic<std::uint64_t> timeouts{0};    ///< idle or trickling clients dropped
   std::atomic<int> clients{0};
 };
@@ -59,6 +59,7 @@ class ModbusServer {
   void run();
   void apply_pending();
   bool handle(Client& c);  ///< false: close the connection
+  void note_rejection(const std::string& what);
   ModbusTcpConfig cfg_;
   int listen_fd_ = -1, port_ = 0;
   int wake_[2] = {-1, -1};
@@ -73,6 +74,8 @@ class ModbusServer {
   std::vector<std::string> allow_;
   ServerStats stats_;
   std::atomic<bool> stop_{false};
+  std::chrono::steady_clock::time_point last_rejection_log_{};
+  std::uint64_t rejections_unlogged_ = 0;
   std::thread th_;
 };
 

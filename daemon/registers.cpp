@@ -16,11 +16,12 @@ std::vector<RegisterDef> build_map() {
   using T = RegTable;
   using Y = RegType;
   std::vector<RegisterDef> m = {
-      {"map_version", T::Input, 0, 1, Y::U16, "", "register map version (1)"},
+      {"map_version", T::Input, 0, 1, Y::U16, "", "register map version (2)"},
       {"status_flags", T::Input, 1, 1, Y::U16, "bits",
        "0 running, 1 source finished, 2 ref encoder missing, 3 wheel encoder missing, 4 pressure "
-       "missing, 5 event active, 6 store degraded (samples not stored), 7 store error, 8 recorder "
-       "error, 9 writable"},
+       "missing, 5 event active, 6 store degraded (samples not stored), 7 store error (the last "
+       "commit failed; retrying), 8 recorder error, 9 writable, 10 events waiting for the store "
+       "(finished, not yet stored nor published)"},
       {"uptime_s", T::Input, 2, 2, Y::U32, "s", "seconds since start"},
       {"frames", T::Input, 4, 2, Y::U32, "", "frames received from the source"},
       {"events_finished", T::Input, 6, 2, Y::U32, "", "brake events finished since start"},
@@ -37,6 +38,15 @@ std::vector<RegisterDef> build_map() {
       {"modbus_exceptions", T::Input, 24, 2, Y::U32, "",
        "Modbus TCP exception replies and refused frames"},
       {"modbus_clients", T::Input, 26, 1, Y::U16, "", "connected Modbus TCP clients"},
+      {"events_waiting", T::Input, 27, 1, Y::U16, "",
+       "finished events not yet stored (so not yet published): in memory or spilled"},
+      {"events_spilled", T::Input, 28, 1, Y::U16, "",
+       "of those, spilled to files beside the store"},
+      {"store_failures", T::Input, 29, 2, Y::U32, "", "failed commit attempts (each retried)"},
+      {"events_lost", T::Input, 31, 2, Y::U32, "",
+       "finished events dropped: the store and the spill directory both failed past max_held"},
+      {"modbus_rejected", T::Input, 33, 2, Y::U32, "",
+       "Modbus TCP connections refused or evicted (per-address limit, max_clients)"},
       {"v_ref_mps", T::Input, 40, 2, Y::F32, "m/s",
        "reference speed (roller surface or fifth wheel)"},
       {"v_wheel_mps", T::Input, 42, 2, Y::F32, "m/s", "tested wheel circumferential speed"},

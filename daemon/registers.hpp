@@ -24,7 +24,7 @@ struct RegisterDef {
   const char* description;
 };
 
-inline constexpr std::uint16_t kMapVersion = 1;
+inline constexpr std::uint16_t kMapVersion = 2;
 inline constexpr std::uint16_t kInputRegisters = 200;
 inline constexpr std::uint16_t kHoldingRegisters = 16;
 
@@ -40,6 +40,7 @@ enum StatusBit : std::uint16_t {
   kStatusStoreError = 1u << 7,     ///< an event could not be stored at all
   kStatusRecorderError = 1u << 8,
   kStatusWritable = 1u << 9,
+  kStatusEventsWaiting = 1u << 10,  ///< finished events wait for the store (not yet published)
 };
 /// Event flag bits (input register "event.flags").
 enum EventFlagBit : std::uint16_t {

@@ -4,10 +4,18 @@
 #include <fmt/ranges.h>
 #include <sqlite3.h>
 #include <sys/statvfs.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <random>
 #include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "core/curve.hpp"
 
 namespace brakefit::daemon {
 
@@ -29,7 +37,8 @@ CREATE TABLE IF NOT EXISTS events (
   model_hash TEXT NOT NULL,
   samples_stored INTEGER NOT NULL,
   calibration_toml TEXT NOT NULL,
-  result_json TEXT NOT NULL
+  result_json TEXT NOT NULL,
+  uid TEXT
 );
 CREATE TABLE IF NOT EXISTS samples (
   event_id INTEGER PRIMARY KEY REFERENCES events(id) ON DELETE CASCADE,
@@ -38,6 +47,17 @@ CREATE TABLE IF NOT EXISTS samples (
 );
 CREATE INDEX IF NOT EXISTS events_created ON events(created_unix_s);
 )sql";
+
+/// Stores made before the uid column get it (NULL for their rows).
+bool has_uid_column(sqlite3* db) {
+  sqlite3_stmt* s = nullptr;
+  bool found = false;
+  if (sqlite3_prepare_v2(db, "PRAGMA table_info(events)", -1, &s, nullptr) == SQLITE_OK)
+    while (sqlite3_step(s) == SQLITE_ROW)
+      found |= std::strcmp(reinterpret_cast<const char*>(sqlite3_column_text(s, 1)), "uid") == 0;
+  sqlite3_finalize(s);
+  return found;
+}
 
 constexpr std::size_t kRecord = 8 + 4 * 8 + 2;
 
@@ -107,6 +127,33 @@ T get(const unsigned char*& p) {
   return v;
 }
 
+/// SQLite says only "unable to open database file"; the system's reason is found first.
+void check_path(const std::string& path, bool read_only) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!read_only && !fs::exists(dir, ec)) {
+    fs::create_directories(dir, ec);
+    if (ec)
+      throw std::runtime_error(fmt::format("{}: cannot create the directory {}: {}", path,
+                                           dir.string(), ec.message()));
+  }
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw std::runtime_error(
+        fmt::format("{}: {} is not a directory: {}", path, dir.string(), std::strerror(ENOTDIR)));
+  if (::access(dir.c_str(), read_only ? X_OK : (W_OK | X_OK)) != 0)
+    throw std::runtime_error(
+        fmt::format("{}: cannot {} in {}: {}", path, read_only ? "read" : "write", dir.string(),
+                    std::strerror(errno)));
+  if (fs::is_directory(p, ec))
+    throw std::runtime_error(fmt::format("{}: is a directory, not an event store", path));
+  if (fs::exists(p, ec) && ::access(p.c_str(), read_only ? R_OK : (R_OK | W_OK)) != 0)
+    throw std::runtime_error(fmt::format("{}: {}", path, std::strerror(errno)));
+  if (read_only && !fs::exists(p, ec))
+    throw std::runtime_error(fmt::format("{}: no such event store", path));
+}
+
 }  // namespace
 
 std::string pack_samples(const std::vector<pipeline::Sample>& s) {
@@ -141,12 +188,8 @@ std::vector<pipeline::Sample> unpack_samples(const void* data, std::size_t n) {
   return out;
 }
 
-EventStore::EventStore(const StoreConfig& c, bool read_only) : cfg_(c) {
-  if (!read_only) {
-    std::error_code ec;
-    const auto dir = std::filesystem::path(c.path).parent_path();
-    if (!dir.empty()) std::filesystem::create_directories(dir, ec);
-  }
+EventStore::EventStore(const StoreConfig& c, bool read_only, int busy_timeout_ms) : cfg_(c) {
+  check_path(c.path, read_only);
   const int flags = read_only ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   if (sqlite3_open_v2(c.path.c_str(), &db_, flags | SQLITE_OPEN_FULLMUTEX, nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
@@ -154,14 +197,18 @@ EventStore::EventStore(const StoreConfig& c, bool read_only) : cfg_(c) {
     db_ = nullptr;
     throw std::runtime_error(fmt::format("{}: cannot open event store: {}", c.path, msg));
   }
-  sqlite3_busy_timeout(db_, 2000);
+  // Opening (the schema) may wait longer for another process than one commit from the loop does.
+  sqlite3_busy_timeout(db_, std::max(busy_timeout_ms, 5000));
   try {
     exec(db_, "PRAGMA foreign_keys=ON");
     if (!read_only) {
       exec(db_, "PRAGMA journal_mode=WAL");
       exec(db_, "PRAGMA synchronous=FULL");
       exec(db_, kSchema);
+      if (!has_uid_column(db_)) exec(db_, "ALTER TABLE events ADD COLUMN uid TEXT");
+      exec(db_, "CREATE INDEX IF NOT EXISTS events_uid ON events(uid)");
     }
+    sqlite3_busy_timeout(db_, busy_timeout_ms);
   } catch (const std::exception& e) {
     sqlite3_close(db_);
     db_ = nullptr;
@@ -182,41 +229,131 @@ bool EventStore::disk_low() const {
   return free_mb < cfg_.min_free_mb;
 }
 
-int EventStore::insert(const pipeline::EventResult& e, const std::string& result_json,
-                       const std::string& calibration_toml, const std::string& vehicle_id,
-                       const std::string& source, const std::string& model_hash, std::int64_t now,
-                       bool with_samples, std::int64_t& id) {
+EventRecord make_record(const pipeline::EventResult& e, const std::string& result_json,
+                        const std::string& calibration_toml, const std::string& vehicle_id,
+                        const std::string& source, const std::string& model_hash,
+                        std::int64_t now_unix_s) {
+  EventRecord r;
+  std::random_device rd;
+  r.uid = fmt::format("{:08x}{:08x}{:08x}{:08x}", rd(), rd(), rd(), rd());
+  r.created_unix_s = now_unix_s;
+  r.source = source;
+  r.vehicle_id = vehicle_id;
+  r.bench = can::to_string(e.event.bench);
+  r.end_reason = e.event.end_reason;
+  r.flags = fmt::format("{}", fmt::join(e.event.flags, ","));
+  r.model_hash = model_hash;
+  r.pipeline_event_id = e.event.event_id;
+  r.t_start_ns = e.event.t_start_ns;
+  r.t_end_ns = e.event.t_end_ns;
+  r.points = static_cast<std::int64_t>(e.curve.size());
+  r.calibration_toml = calibration_toml;
+  r.result_json = result_json;
+  r.sample_count = static_cast<std::int64_t>(e.event.samples.size());
+  r.samples_blob = pack_samples(e.event.samples);
+  return r;
+}
+
+std::string record_to_cbor(const EventRecord& r) {
+  nlohmann::json j;
+  j["schema"] = "brakefit.spilled_event/1";
+  j["uid"] = r.uid;
+  j["created_unix_s"] = r.created_unix_s;
+  j["source"] = r.source;
+  j["vehicle_id"] = r.vehicle_id;
+  j["bench"] = r.bench;
+  j["end_reason"] = r.end_reason;
+  j["flags"] = r.flags;
+  j["model_hash"] = r.model_hash;
+  j["pipeline_event_id"] = r.pipeline_event_id;
+  j["t_start_ns"] = r.t_start_ns;
+  j["t_end_ns"] = r.t_end_ns;
+  j["points"] = r.points;
+  j["calibration_toml"] = r.calibration_toml;
+  j["result_json"] = r.result_json;
+  j["sample_count"] = r.sample_count;
+  j["samples"] = nlohmann::json::binary(
+      std::vector<std::uint8_t>(r.samples_blob.begin(), r.samples_blob.end()));
+  const auto bytes = nlohmann::json::to_cbor(j);
+  return {bytes.begin(), bytes.end()};
+}
+
+EventRecord record_from_cbor(std::string_view bytes, const std::string& where) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::from_cbor(bytes.begin(), bytes.end());
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: not a spilled event (CBOR): {}", where, e.what()));
+  }
+  auto field = [&](const char* k) -> const nlohmann::json& {
+    if (!j.is_object() || !j.contains(k))
+      throw InputError(fmt::format("{}: spilled event has no '{}'", where, k));
+    return j.at(k);
+  };
+  try {
+    if (field("schema") != "brakefit.spilled_event/1")
+      throw InputError(fmt::format("{}: schema is not brakefit.spilled_event/1", where));
+    EventRecord r;
+    r.uid = field("uid").get<std::string>();
+    r.created_unix_s = field("created_unix_s").get<std::int64_t>();
+    r.source = field("source").get<std::string>();
+    r.vehicle_id = field("vehicle_id").get<std::string>();
+    r.bench = field("bench").get<std::string>();
+    r.end_reason = field("end_reason").get<std::string>();
+    r.flags = field("flags").get<std::string>();
+    r.model_hash = field("model_hash").get<std::string>();
+    r.pipeline_event_id = field("pipeline_event_id").get<std::int64_t>();
+    r.t_start_ns = field("t_start_ns").get<std::int64_t>();
+    r.t_end_ns = field("t_end_ns").get<std::int64_t>();
+    r.points = field("points").get<std::int64_t>();
+    r.calibration_toml = field("calibration_toml").get<std::string>();
+    r.result_json = field("result_json").get<std::string>();
+    r.sample_count = field("sample_count").get<std::int64_t>();
+    const auto& bin = field("samples").get_binary();
+    r.samples_blob.assign(bin.begin(), bin.end());
+    if (r.sample_count < 0 ||
+        r.samples_blob.size() != static_cast<std::size_t>(r.sample_count) * kRecord)
+      throw InputError(fmt::format("{}: {} samples do not fill {} bytes", where, r.sample_count,
+                                   r.samples_blob.size()));
+    return r;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: spilled event: {}", where, e.what()));
+  }
+}
+
+int EventStore::insert(const EventRecord& r, bool with_samples, std::int64_t& id) {
   int rc = sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr);
   if (rc != SQLITE_OK) return rc;
   {
     Stmt st(db_,
             "INSERT INTO events (created_unix_s, source, vehicle_id, pipeline_event_id, bench, "
             "t_start_ns, t_end_ns, end_reason, flags, points, model_hash, samples_stored, "
-            "calibration_toml, result_json) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
-    st.i64(1, now);
-    st.text(2, source);
-    st.text(3, vehicle_id);
-    st.i64(4, e.event.event_id);
-    st.text(5, can::to_string(e.event.bench));
-    st.i64(6, e.event.t_start_ns);
-    st.i64(7, e.event.t_end_ns);
-    st.text(8, e.event.end_reason);
-    st.text(9, fmt::format("{}", fmt::join(e.event.flags, ",")));
-    st.i64(10, static_cast<std::int64_t>(e.curve.size()));
-    st.text(11, model_hash);
+            "calibration_toml, result_json, uid) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+    st.i64(1, r.created_unix_s);
+    st.text(2, r.source);
+    st.text(3, r.vehicle_id);
+    st.i64(4, r.pipeline_event_id);
+    st.text(5, r.bench);
+    st.i64(6, r.t_start_ns);
+    st.i64(7, r.t_end_ns);
+    st.text(8, r.end_reason);
+    st.text(9, r.flags);
+    st.i64(10, r.points);
+    st.text(11, r.model_hash);
     st.i64(12, with_samples ? 1 : 0);
-    st.text(13, calibration_toml);
-    st.text(14, result_json);
+    st.text(13, r.calibration_toml);
+    st.text(14, r.result_json);
+    st.text(15, r.uid);
     rc = sqlite3_step(st.s);
   }
   if (rc == SQLITE_DONE) {
     id = sqlite3_last_insert_rowid(db_);
     if (with_samples) {
-      const std::string blob = pack_samples(e.event.samples);
       Stmt st(db_, "INSERT INTO samples (event_id, count, data) VALUES (?,?,?)");
       st.i64(1, id);
-      st.i64(2, static_cast<std::int64_t>(e.event.samples.size()));
-      sqlite3_bind_blob(st.s, 3, blob.data(), static_cast<int>(blob.size()), SQLITE_TRANSIENT);
+      st.i64(2, r.sample_count);
+      sqlite3_bind_blob(st.s, 3, r.samples_blob.data(), static_cast<int>(r.samples_blob.size()),
+                        SQLITE_TRANSIENT);
       rc = sqlite3_step(st.s);
     }
   }
@@ -228,20 +365,15 @@ int EventStore::insert(const pipeline::EventResult& e, const std::string& result
   return SQLITE_OK;
 }
 
-std::optional<std::int64_t> EventStore::commit(
-    const pipeline::EventResult& e, const std::string& result_json,
-    const std::string& calibration_toml, const std::string& vehicle_id, const std::string& source,
-    const std::string& model_hash, std::int64_t now_unix_s, bool* samples_stored) {
+std::optional<std::int64_t> EventStore::commit(const EventRecord& r, bool* samples_stored) {
   std::int64_t id = 0;
   bool with_samples = cfg_.store_samples && !disk_low();
   if (cfg_.store_samples && !with_samples) degraded_ = true;
-  int rc = insert(e, result_json, calibration_toml, vehicle_id, source, model_hash, now_unix_s,
-                  with_samples, id);
+  int rc = insert(r, with_samples, id);
   if (rc == SQLITE_FULL && with_samples) {
     degraded_ = true;  // the disk is full: keep the results, stop storing raw samples
     with_samples = false;
-    rc = insert(e, result_json, calibration_toml, vehicle_id, source, model_hash, now_unix_s, false,
-                id);
+    rc = insert(r, false, id);
   }
   if (rc != SQLITE_OK) {
     error_ = fmt::format("{}: cannot store event: {}", cfg_.path, sqlite3_errstr(rc));
@@ -249,6 +381,28 @@ std::optional<std::int64_t> EventStore::commit(
   }
   if (samples_stored) *samples_stored = with_samples;
   return id;
+}
+
+std::optional<std::int64_t> EventStore::commit(
+    const pipeline::EventResult& e, const std::string& result_json,
+    const std::string& calibration_toml, const std::string& vehicle_id, const std::string& source,
+    const std::string& model_hash, std::int64_t now_unix_s, bool* samples_stored) {
+  return commit(
+      make_record(e, result_json, calibration_toml, vehicle_id, source, model_hash, now_unix_s),
+      samples_stored);
+}
+
+std::optional<std::int64_t> EventStore::find(const EventRecord& r) const {
+  Stmt st(db_, "SELECT id FROM events WHERE uid = ?");
+  st.text(1, r.uid);
+  if (sqlite3_step(st.s) != SQLITE_ROW) return std::nullopt;
+  return sqlite3_column_int64(st.s, 0);
+}
+
+std::optional<StoredEvent> EventStore::last() const {
+  Stmt st(db_, fmt::format("SELECT {} FROM events ORDER BY id DESC LIMIT 1", kCols).c_str());
+  if (sqlite3_step(st.s) != SQLITE_ROW) return std::nullopt;
+  return row(st);
 }
 
 int EventStore::apply_retention(std::int64_t now_unix_s) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/pipeline/pipeline.hpp"
@@ -27,21 +28,52 @@ struct StoredEvent {
   std::string result_json;  ///< brakefit.event/1 document
 };
 
+/// What the store keeps of one finished event: its row and its raw samples, built once when the
+/// event finishes. It may wait (in memory, or spilled to a file) until the store takes it.
+struct EventRecord {
+  std::string uid;  ///< random, made once: a record committed twice (spill + crash) is found
+  std::int64_t created_unix_s = 0;
+  std::string source, vehicle_id, bench, end_reason, flags, model_hash;
+  std::int64_t pipeline_event_id = 0, t_start_ns = 0, t_end_ns = 0, points = 0;
+  std::string calibration_toml;
+  std::string result_json;  ///< brakefit.event/1 document
+  std::int64_t sample_count = 0;
+  std::string samples_blob;  ///< pack_samples()
+};
+
+EventRecord make_record(const pipeline::EventResult& e, const std::string& result_json,
+                        const std::string& calibration_toml, const std::string& vehicle_id,
+                        const std::string& source, const std::string& model_hash,
+                        std::int64_t now_unix_s);
+/// A record as CBOR (the spill file format) and back; the reader throws InputError naming
+/// `where` on anything that is not a complete record.
+std::string record_to_cbor(const EventRecord& r);
+EventRecord record_from_cbor(std::string_view bytes, const std::string& where);
+
 class EventStore {
  public:
-  /// Opens (creating when writable) the database; throws std::runtime_error naming the path.
-  EventStore(const StoreConfig& c, bool read_only);
+  /// Opens (creating when writable) the database; throws std::runtime_error naming the path and
+  /// the system's reason (no such directory, not a directory, permission denied).
+  /// busy_timeout_ms: how long one commit waits for another process's lock; the daemon keeps it
+  /// short and retries from its loop.
+  EventStore(const StoreConfig& c, bool read_only, int busy_timeout_ms = 2000);
   ~EventStore();
   EventStore(const EventStore&) = delete;
   EventStore& operator=(const EventStore&) = delete;
 
   /// Commits the event; returns its row id, or std::nullopt when even the results could not be
   /// stored (error() then says why). samples_stored: whether the raw samples went in too.
+  std::optional<std::int64_t> commit(const EventRecord& r, bool* samples_stored = nullptr);
   std::optional<std::int64_t> commit(const pipeline::EventResult& e, const std::string& result_json,
                                      const std::string& calibration_toml,
                                      const std::string& vehicle_id, const std::string& source,
                                      const std::string& model_hash, std::int64_t now_unix_s,
                                      bool* samples_stored = nullptr);
+  /// The id of the stored event with this record's uid (a spilled record whose commit went
+  /// through before a crash), if any.
+  std::optional<std::int64_t> find(const EventRecord& r) const;
+  /// The newest stored event (restored into the registers after a restart).
+  std::optional<StoredEvent> last() const;
   /// Deletes events older than retention_days or beyond max_events; returns how many.
   int apply_retention(std::int64_t now_unix_s);
   std::vector<StoredEvent> list(int limit) const;
@@ -57,10 +89,7 @@ class EventStore {
 
  private:
   bool disk_low() const;
-  int insert(const pipeline::EventResult& e, const std::string& result_json,
-             const std::string& calibration_toml, const std::string& vehicle_id,
-             const std::string& source, const std::string& model_hash, std::int64_t now,
-             bool with_samples, std::int64_t& id);
+  int insert(const EventRecord& r, bool with_samples, std::int64_t& id);
   StoreConfig cfg_;
   sqlite3* db_ = nullptr;
   bool degraded_ = false;

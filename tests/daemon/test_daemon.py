@@ -71,7 +71,7 @@ class Notify:
 
 class Daemon:
     def __init__(self, tmp, source, *, store=None, speed=0.0, exit_at_end=False, extra="",
-                 env=None, port=None):
+                 env=None, port=None, min_free_mb=0):
         self.tmp = tmp
         self.port = port or free_port()
         self.store = store or os.path.join(tmp, "events.db")
@@ -82,7 +82,7 @@ class Daemon:
                     f'[source]\nkind = "replay"\nfile = "{source}"\nspeed = {speed}\n'
                     f'exit_at_end = {"true" if exit_at_end else "false"}\n'
                     f'{BENCH}\n[modbus_tcp]\naddress = "127.0.0.1"\nport = {self.port}\n'
-                    f'[store]\npath = "{self.store}"\nmin_free_mb = 0\n{extra}')
+                    f'[store]\npath = "{self.store}"\nmin_free_mb = {min_free_mb}\n{extra}')
         self.env = dict(os.environ, **(env or {}))
         self.err = open(os.path.join(tmp, "brakefitd.log"), "a")
         self.proc = subprocess.Popen([DAEMON, "--config", self.config], env=self.env,
@@ -345,7 +345,9 @@ class DaemonTest(unittest.TestCase):
         s.sendall(bytes([0, 2, 0, 7, 0, 6, 1, 4, 0, 0, 0, 1]))  # protocol id 7
         self.assertEqual(s.recv(64), b"")
         s.close()
-        socks = [socket.create_connection(("127.0.0.1", d.port)) for _ in range(100)]
+        # A hundred hosts (127.0.0.2-101): each is served, whatever the per-address limit.
+        socks = [socket.create_connection(("127.0.0.1", d.port), source_address=(f"127.0.0.{i + 2}", 0))
+                 for i in range(100)]
         for i, c in enumerate(socks):
             c.sendall(bytes([0, i, 0, 0, 0, 6, 1, 4, 0, 101, 0, 2]))
         ok = 0

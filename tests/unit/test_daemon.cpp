@@ -20,10 +20,15 @@
 #include "daemon/modbus_server.hpp"
 #include "daemon/registers.hpp"
 #include "daemon/store.hpp"
+#include "daemon_test_util.hpp"
 #include "test_util.hpp"
 
 using namespace brakefit;
 using namespace brakefit::daemon;
+using brakefit::test::make_event;
+using brakefit::test::raw_connect;
+using brakefit::test::raw_recv;
+using brakefit::test::TempDir;
 
 namespace {
 
@@ -126,42 +131,6 @@ TEST(Registers, Float32IsPackedAbcdByOurOwnCode) {
   EXPECT_EQ(u[1], 0x5678);
 }
 
-namespace {
-
-pipeline::EventResult make_event(int id, std::size_t n) {
-  pipeline::EventResult e;
-  e.event.event_id = id;
-  e.event.t_start_ns = 1'000'000'000LL * id;
-  e.event.t_end_ns = e.event.t_start_ns + 2'000'000'000LL;
-  e.event.end_reason = "switch_off_slip";
-  for (std::size_t i = 0; i < n; ++i) {
-    pipeline::Sample s;
-    s.t_ns = e.event.t_start_ns + static_cast<std::int64_t>(i) * 1'000'000;
-    s.v_ref_mps = 1.389;
-    s.v_wheel_mps = 1.389 * (1 - 0.27 * static_cast<double>(i) / static_cast<double>(n));
-    s.pressure_bar = 0.05 * static_cast<double>(i);
-    s.force_n = i % 2 ? NAN : 3.0 * static_cast<double>(i);
-    s.state = can::TestState::Measuring;
-    s.sensor_fault = i == 3;
-    e.event.samples.push_back(s);
-    e.curve.slip_ratio.push_back(pipeline::slip_ratio(s));
-    e.curve.force_n.push_back(66.7 * s.pressure_bar);
-  }
-  return e;
-}
-
-struct TempDir {
-  std::filesystem::path p;
-  TempDir() {
-    p = std::filesystem::temp_directory_path() /
-        ("bf_daemon_" + std::to_string(::getpid()) + "_" +
-         std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
-    std::filesystem::create_directories(p);
-  }
-  ~TempDir() { std::filesystem::remove_all(p); }
-};
-
-}  // namespace
 
 TEST(Store, CommitsEventsWithSamplesAndReadsThemBack) {
   TempDir tmp;
@@ -276,26 +245,6 @@ modbus_t* client(int port) {
   modbus_set_response_timeout(m, 1, 0);
   EXPECT_EQ(modbus_connect(m), 0);
   return m;
-}
-
-int raw_connect(int port) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  EXPECT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  return fd;
-}
-
-/// Bytes received within timeout_ms; empty on close/timeout.
-std::vector<std::uint8_t> raw_recv(int fd, int timeout_ms) {
-  pollfd p{fd, POLLIN, 0};
-  if (::poll(&p, 1, timeout_ms) <= 0) return {};
-  std::vector<std::uint8_t> b(300);
-  const ssize_t n = ::recv(fd, b.data(), b.size(), 0);
-  b.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
-  return b;
 }
 
 }  // namespace
@@ -427,6 +376,7 @@ TEST(ModbusServer, ATricklingClientDoesNotStallTheOthers) {
 TEST(ModbusServer, AHundredClientsAtOnceAreAllServed) {
   ModbusTcpConfig c;
   c.max_clients = 128;
+  c.max_clients_per_address = 128;  // all from 127.0.0.1 here
   Server srv(c);
   std::vector<int> fds;
   for (int i = 0; i < 100; ++i) fds.push_back(raw_connect(srv.s.port()));
