@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <openssl/evp.h>
 
+#include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "brakefit/version.hpp"
@@ -83,6 +85,19 @@ std::string serialize_model(Model& m) {
   return body.dump(1) + "\n";
 }
 
+std::string resign_model_text(std::string_view text) {
+  json body;
+  try {
+    body = json::parse(text);
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("not JSON: {}", e.what()));
+  }
+  if (!body.is_object()) throw InputError("not a JSON object");
+  body.erase("checksum");
+  body["checksum"] = sha256_hex(body.dump());
+  return body.dump(1);
+}
+
 Model deserialize_model(std::string_view text, const std::string& source) {
   auto fail = [&](const std::string& msg) {
     return InputError(fmt::format("{}: {}", source, msg));
@@ -92,6 +107,8 @@ Model deserialize_model(std::string_view text, const std::string& source) {
     body = json::parse(text);
   } catch (const json::parse_error& e) {
     throw fail(fmt::format("not a brakefit model (corrupt or truncated JSON at byte {})", e.byte));
+  } catch (const json::exception& e) {  // e.g. a number beyond double (1e999)
+    throw fail(fmt::format("not a brakefit model: {}", e.what()));
   }
   if (!body.is_object() || body.value("schema", "") != kModelSchema)
     throw fail(fmt::format("not a brakefit model (schema is not '{}')", kModelSchema));
@@ -118,6 +135,8 @@ Model deserialize_model(std::string_view text, const std::string& source) {
       throw fail("model slip grid does not match this brakefit's grid (retrain the model)");
     const json& s = body.at("som");
     const auto rows = s.at("rows").get<std::size_t>(), cols = s.at("cols").get<std::size_t>();
+    if (rows < 1 || cols < 1 || rows > 1000 || cols > 1000)
+      throw fail(fmt::format("SOM of {} x {} units (1 to 1000 each way)", rows, cols));
     const auto cb = s.at("codebook").get<std::vector<std::vector<double>>>();
     if (cb.size() != rows * cols) throw fail("SOM codebook size does not match rows x cols");
     Eigen::MatrixXd codebook(static_cast<Eigen::Index>(cb.size()),
@@ -132,17 +151,28 @@ Model deserialize_model(std::string_view text, const std::string& source) {
     const auto labels = s.at("unit_labels").get<std::vector<std::array<double, 4>>>();
     if (m.unit_hits.size() != cb.size() || labels.size() != cb.size())
       throw fail("SOM labels do not match the map size");
-    for (const auto& l : labels) m.unit_labels.push_back(MfParams{l[0], l[1], l[2], l[3], 0, 0});
+    if (std::none_of(m.unit_hits.begin(), m.unit_hits.end(), [](std::size_t h) { return h > 0; }))
+      throw fail("SOM has no unit with training hits (no unit can identify a curve)");
+    for (const auto& l : labels) {
+      if (!std::all_of(l.begin(), l.end(), [](double v) { return std::isfinite(v); }))
+        throw fail("SOM unit label is not finite");
+      m.unit_labels.push_back(MfParams{l[0], l[1], l[2], l[3], 0, 0});
+    }
     m.som_qe = s.at("qe").get<double>();
     m.som_te = s.at("te").get<double>();
     const json& n = body.at("mlp");
     const auto layers = n.at("layers").get<std::vector<std::size_t>>();
-    if (layers.size() < 2 || layers.front() != m.grid.size() + 1 || layers.back() != 3)
+    if (layers.size() < 2 || layers.size() > 16 || layers.front() != m.grid.size() + 1 ||
+        layers.back() != 3)
       throw fail("MLP layer sizes do not match the slip grid and the 3 outputs");
+    for (auto l : layers)
+      if (l < 1 || l > 4096) throw fail("MLP layer of 0 or more than 4096 units");
     m.mlp = mlp::Network(layers, 0);
     const auto w = n.at("parameters").get<std::vector<double>>();
     if (w.size() != m.mlp.parameter_count())
       throw fail("MLP parameter count does not match its layers");
+    if (!std::all_of(w.begin(), w.end(), [](double v) { return std::isfinite(v); }))
+      throw fail("MLP parameter is not finite");
     m.mlp.set_parameters(
         Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())));
     m.mlp_in = {row_from(n.at("input_mean").get<std::vector<double>>()),

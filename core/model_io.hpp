@@ -15,6 +15,9 @@ inline constexpr const char* kModelSchema = "brakefit.model/1";
 /// Serialises the model and sets m.hash.
 std::string serialize_model(Model& m);
 /// Throws InputError naming the source for corrupt, truncated or mismatched files.
+/// Re-signs a model's JSON text (its checksum recomputed): for tests and the fuzzer, which change
+/// a model on purpose to reach the checks behind the checksum. Throws InputError on bad JSON.
+std::string resign_model_text(std::string_view text);
 Model deserialize_model(std::string_view text, const std::string& source);
 /// "sha256:<hex>" of the bytes.
 std::string sha256_hex(std::string_view bytes);

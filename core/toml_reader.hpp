@@ -15,7 +15,12 @@
 
 namespace brakefit {
 
-/// Parses TOML text; syntax errors become InputError "SOURCE:LINE:COL: ...".
+/// Throws InputError "SOURCE:LINE:COL: ..." unless the text is valid UTF-8 without control
+/// characters other than tab, CR and LF (toml++ 3.3.0 reaches an unreachable() on some such
+/// input: upstream issue 295).
+void check_plain_text(std::string_view text, const std::string& source);
+/// Parses TOML text (after check_plain_text); syntax errors become InputError
+/// "SOURCE:LINE:COL: ...".
 toml::table parse_toml(std::string_view text, const std::string& source);
 
 class TomlReader {

@@ -16,13 +16,7 @@ const char* to_string(SomInput s) {
 }
 
 TrainConfig parse_train_config(std::string_view text, const std::string& source) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    throw InputError(fmt::format("{}:{}:{}: {}", source, e.source().begin.line,
-                                 e.source().begin.column, std::string(e.description())));
-  }
+  const toml::table root = parse_toml(text, source);
   TomlReader rd(source);
   rd.check_keys(root, "", {"database", "som", "mlp"});
   TrainConfig c;

@@ -6,12 +6,15 @@
 #include <systemd/sd-daemon.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <ctime>
 #include <fstream>
 #include <sstream>
 #include <thread>
+
+#include <unistd.h>
 
 #include "brakefit/version.hpp"
 
@@ -71,7 +74,14 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
   try {
     switch (cfg_.kind) {
       case SourceKind::Replay:
-        source_ = std::make_unique<drivers::ReplaySource>(cfg_.replay_file, cfg_.replay_speed);
+        if (::access(cfg_.replay_file.c_str(), R_OK) != 0)
+          throw DaemonError(kExitUnavailable, fmt::format("source: {}: cannot open: {}",
+                                                          cfg_.replay_file, std::strerror(errno)));
+        try {  // there and readable: what is wrong now is its content (65, naming the line)
+          source_ = std::make_unique<drivers::ReplaySource>(cfg_.replay_file, cfg_.replay_speed);
+        } catch (const InputError& e) {
+          throw DaemonError(kExitDataError, fmt::format("source: {}", e.what()));
+        }
         break;
       case SourceKind::SocketCan:
         source_ = std::make_unique<drivers::SocketCanSource>(

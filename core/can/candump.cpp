@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <charconv>
+#include <limits>
 
 #include "core/curve.hpp"  // InputError
 
@@ -101,8 +102,13 @@ std::optional<LoggedFrame> parse_candump_line(std::string_view line) {
   auto r1 = std::from_chars(ts.data(), ts.data() + dot, sec);
   auto r2 = std::from_chars(ts.data() + dot + 1, ts.data() + ts.size(), usec);
   if (r1.ec != std::errc() || r1.ptr != ts.data() + dot || r2.ec != std::errc() ||
-      r2.ptr != ts.data() + ts.size())
-    throw CandumpError(fmt::format("timestamp '({})' is not numeric", std::string(ts)));
+      r2.ptr != ts.data() + ts.size() || ts.front() == '-' || ts[dot + 1] == '-')
+    throw CandumpError(
+        fmt::format("timestamp '({})' is not (seconds.microseconds) of digits", std::string(ts)));
+  // Seconds times 10^6 must fit the microsecond count (year 294 000); candump never writes more.
+  constexpr std::int64_t kMaxSeconds = std::numeric_limits<std::int64_t>::max() / 1000000 - 1;
+  if (sec > kMaxSeconds)
+    throw CandumpError(fmt::format("timestamp '({})' is out of range", std::string(ts)));
   std::string_view rest = line.substr(close + 1);
   if (rest.empty() || rest.front() != ' ')
     throw CandumpError("expected a space after the timestamp");

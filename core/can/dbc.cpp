@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
+#include <charconv>
 #include <cmath>
-#include <regex>
+#include <cstring>
 #include <stdexcept>
 
 #include "core/curve.hpp"  // InputError
@@ -16,50 +18,142 @@ const SignalDef& MessageDef::signal(std::string_view n) const {
   throw std::out_of_range(fmt::format("message {} has no signal {}", name, std::string(n)));
 }
 
+namespace {
+
+/// A cursor over one line of a DBC file: no regex (a long line cannot exhaust the stack), every
+/// number range-checked (no std::stoul exceptions, no start bit 4294967295).
+class Cursor {
+ public:
+  Cursor(std::string_view line, const std::string& where) : s_(line), where_(where) {}
+  void ws() {
+    while (i_ < s_.size() && (s_[i_] == ' ' || s_[i_] == '\t')) ++i_;
+  }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(fmt::format("{}: {} (at column {})", where_, what, i_ + 1));
+  }
+  void expect(char c) {
+    ws();
+    if (i_ >= s_.size() || s_[i_] != c) fail(fmt::format("expected '{}'", c));
+    ++i_;
+  }
+  bool accept(char c) {
+    ws();
+    if (i_ < s_.size() && s_[i_] == c) {
+      ++i_;
+      return true;
+    }
+    return false;
+  }
+  std::string word(const char* what) {
+    ws();
+    const auto b = i_;
+    while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '_'))
+      ++i_;
+    if (b == i_) fail(fmt::format("expected {}", what));
+    return std::string(s_.substr(b, i_ - b));
+  }
+  std::uint64_t unsigned_in(const char* what, std::uint64_t lo, std::uint64_t hi) {
+    ws();
+    std::uint64_t v = 0;
+    const auto r = std::from_chars(s_.data() + i_, s_.data() + s_.size(), v);
+    if (r.ec == std::errc::result_out_of_range || (r.ec == std::errc() && (v < lo || v > hi)))
+      fail(fmt::format("{} must be {}..{}", what, lo, hi));
+    if (r.ec != std::errc()) fail(fmt::format("expected {}", what));
+    i_ = static_cast<std::size_t>(r.ptr - s_.data());
+    return v;
+  }
+  double number(const char* what) {
+    ws();
+    if (i_ < s_.size() && s_[i_] == '+') ++i_;  // from_chars takes no leading '+'
+    double v = 0;
+    const auto r = std::from_chars(s_.data() + i_, s_.data() + s_.size(), v);
+    if (r.ec != std::errc() || !std::isfinite(v)) fail(fmt::format("expected {} (a finite number)", what));
+    i_ = static_cast<std::size_t>(r.ptr - s_.data());
+    return v;
+  }
+  std::string quoted(const char* what) {
+    expect('"');
+    const auto close = s_.find('"', i_);
+    if (close == std::string_view::npos) fail(fmt::format("{} has no closing '\"'", what));
+    std::string out(s_.substr(i_, close - i_));
+    i_ = close + 1;
+    return out;
+  }
+  char one_of(const char* set, const char* what) {
+    if (i_ < s_.size() && std::strchr(set, s_[i_]) && s_[i_] != '\0') return s_[i_++];
+    fail(fmt::format("expected {}", what));
+  }
+
+ private:
+  std::string_view s_;
+  const std::string& where_;
+  std::size_t i_ = 0;
+};
+
+constexpr std::uint64_t kMaxDlc = 64;  // CAN FD; Frame::data holds 64 bytes
+
+MessageDef parse_bo(Cursor& c) {
+  MessageDef msg;
+  // Extended ids carry bit 31 in DBC files.
+  msg.id = static_cast<std::uint32_t>(c.unsigned_in("the message id", 0, 0x9FFFFFFFull));
+  msg.name = c.word("a message name");
+  c.expect(':');
+  msg.dlc = static_cast<unsigned>(c.unsigned_in("the DLC", 0, kMaxDlc));
+  c.word("the sender");
+  return msg;
+}
+
+SignalDef parse_sg(Cursor& c) {
+  SignalDef s;
+  s.name = c.word("a signal name");
+  c.expect(':');
+  s.start_bit = static_cast<unsigned>(c.unsigned_in("the start bit", 0, 8 * kMaxDlc - 1));
+  c.expect('|');
+  s.length = static_cast<unsigned>(c.unsigned_in("the length", 1, 64));
+  c.expect('@');
+  if (c.one_of("01", "byte order @0 or @1") != '1') c.fail("only Intel byte order (@1) is supported");
+  s.is_signed = c.one_of("+-", "'+' or '-'") == '-';
+  c.expect('(');
+  s.scale = c.number("the scale");
+  if (s.scale == 0) c.fail("the scale must not be 0");
+  c.expect(',');
+  s.offset = c.number("the offset");
+  c.expect(')');
+  c.expect('[');
+  s.min = c.number("the minimum");
+  c.expect('|');
+  s.max = c.number("the maximum");
+  c.expect(']');
+  s.unit = c.quoted("the unit");
+  return s;
+}
+
+}  // namespace
+
 std::vector<MessageDef> parse_dbc(std::string_view text, const std::string& source) {
-  static const std::regex bo(R"(^BO_\s+(\d+)\s+(\w+)\s*:\s*(\d+)\s+\w+\s*$)");
-  static const std::regex sg(
-      R"(^\s+SG_\s+(\w+)\s*:\s*(\d+)\|(\d+)@([01])([+-])\s*\(([-+0-9.eE]+),([-+0-9.eE]+)\)\s*\[([-+0-9.eE]+)\|([-+0-9.eE]+)\]\s*\"([^\"]*)\".*$)");
   std::vector<MessageDef> out;
   std::size_t line_no = 0, pos = 0;
   while (pos < text.size()) {
     auto nl = text.find('\n', pos);
     if (nl == std::string_view::npos) nl = text.size();
-    std::string line(text.substr(pos, nl - pos));
+    std::string_view line = text.substr(pos, nl - pos);
     pos = nl + 1;
     ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::smatch m;
-    if (line.rfind("BO_ ", 0) == 0) {
-      if (!std::regex_match(line, m, bo))
-        throw InputError(fmt::format("{}:{}: malformed BO_ line", source, line_no));
-      MessageDef msg;
-      msg.id = static_cast<std::uint32_t>(std::stoul(m[1]));
-      msg.name = m[2];
-      msg.dlc = static_cast<unsigned>(std::stoul(m[3]));
-      out.push_back(msg);
-    } else if (line.find("SG_ ") != std::string::npos &&
-               line.find_first_not_of(" \t") == line.find("SG_")) {
-      if (!std::regex_match(line, m, sg))
-        throw InputError(fmt::format("{}:{}: malformed SG_ line", source, line_no));
-      if (out.empty()) throw InputError(fmt::format("{}:{}: SG_ before any BO_", source, line_no));
-      if (m[4] != "1")
-        throw InputError(
-            fmt::format("{}:{}: only Intel byte order (@1) is supported", source, line_no));
-      SignalDef s;
-      s.name = m[1];
-      s.start_bit = static_cast<unsigned>(std::stoul(m[2]));
-      s.length = static_cast<unsigned>(std::stoul(m[3]));
-      s.is_signed = m[5] == "-";
-      s.scale = std::stod(m[6]);
-      s.offset = std::stod(m[7]);
-      s.min = std::stod(m[8]);
-      s.max = std::stod(m[9]);
-      s.unit = m[10];
-      if (s.length == 0 || s.length > 64 || s.start_bit + s.length > 8 * out.back().dlc)
-        throw InputError(
-            fmt::format("{}:{}: signal {} does not fit the message", source, line_no, s.name));
-      out.back().signals.push_back(s);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    const std::string where = fmt::format("{}:{}", source, line_no);
+    const auto first = line.find_first_not_of(" \t");
+    if (first == std::string_view::npos) continue;
+    const std::string_view body = line.substr(first);
+    if (first == 0 && body.substr(0, 4) == "BO_ ") {
+      Cursor c(body.substr(4), where);
+      out.push_back(parse_bo(c));
+    } else if (first > 0 && body.substr(0, 4) == "SG_ ") {
+      if (out.empty()) throw InputError(fmt::format("{}: SG_ before any BO_", where));
+      Cursor c(body.substr(4), where);
+      SignalDef s = parse_sg(c);
+      if (std::uint64_t{s.start_bit} + s.length > 8 * std::uint64_t{out.back().dlc})
+        throw InputError(fmt::format("{}: signal {} does not fit the message", where, s.name));
+      out.back().signals.push_back(std::move(s));
     }
   }
   return out;

@@ -10,6 +10,7 @@ import signal
 import socket
 import sqlite3
 import struct
+import subprocess
 import time
 import unittest
 
@@ -206,6 +207,47 @@ class FaultTest(unittest.TestCase):
         self.assertEqual(len(st), 1)
         self.assertFalse(st[0]["samples_stored"])
         self.assertTrue(st[0]["event"]["results"])
+
+    def run_daemon(self, body):
+        path = os.path.join(self.tmp, "one.toml")
+        with open(path, "wb") as f:
+            f.write(body if isinstance(body, bytes) else body.encode())
+        return subprocess.run([test_daemon.DAEMON, "--config", path], capture_output=True,
+                              text=True, timeout=30)
+
+    def test_bad_files_at_start_exit_with_their_own_code_naming_them(self):
+        good = os.path.join(REC, "roller_2p2bar_fast.log")
+        bad = os.path.join(self.tmp, "bad.log")
+        with open(good) as f:
+            lines = f.read().splitlines()
+        lines[10] = "(1700000000.1) can0 100#00"
+        with open(bad, "w") as f:
+            f.write("\n".join(lines) + "\n")
+        common = f'{test_daemon.BENCH}\n[modbus_tcp]\naddress = "127.0.0.1"\nport = 0\n'
+        # A replay log with one bad line: data error 65 naming FILE:LINE (not 69 "absent").
+        out = self.run_daemon(f'[source]\nkind = "replay"\nfile = "{bad}"\n{common}'
+                              f'[store]\npath = "{self.tmp}/e.db"\n')
+        self.assertEqual(out.returncode, 65, out.stderr)
+        self.assertIn(f"{bad}:11:", out.stderr)
+        # A store under a regular file: 73 with the system's reason.
+        afile = os.path.join(self.tmp, "afile")
+        open(afile, "w").close()
+        out = self.run_daemon(f'[source]\nkind = "replay"\nfile = "{good}"\n{common}'
+                              f'[store]\npath = "{afile}/sub/e.db"\n')
+        self.assertEqual(out.returncode, 73, out.stderr)
+        self.assertIn("Not a directory", out.stderr)
+        # A model beyond double and a config that is not text: 78 naming the file.
+        model = os.path.join(self.tmp, "m.json")
+        with open(model, "w") as f:
+            f.write('{"schema": 1e999}')
+        out = self.run_daemon(f'[daemon]\nmodel = "{model}"\n[source]\nkind = "replay"\n'
+                              f'file = "{good}"\n{common}[store]\npath = "{self.tmp}/e.db"\n')
+        self.assertEqual(out.returncode, 78, out.stderr)
+        self.assertIn("m.json: not a brakefit model", out.stderr)
+        out = self.run_daemon(b'[source]\nkind = "replay\xff"\n')
+        self.assertEqual(out.returncode, 78, out.stderr)
+        self.assertIn("invalid UTF-8", out.stderr)
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -143,3 +143,43 @@ TEST(Candump, MalformedLinesGiveTheLineNumberOrAreCountedWhenLenient) {
   EXPECT_EQ(t.frames.size(), 1u);
   EXPECT_EQ(t.malformed, 6u);
 }
+
+// Found by fuzzing and a hostile operator (issue 12): each is a clear error, never UB.
+TEST(Candump, StampsThatOverflowOrAreNegativeAreErrors) {
+  for (const char* line : {"(17000000000000000.007000) can0 100#00", "(-1.000000) can0 100#00",
+                           "(1.-00001) can0 100#00", "(99999999999999999999.000000) can0 100#00"}) {
+    try {
+      parse_candump_text(std::string(line) + "\n", "s.log", false);
+      ADD_FAILURE() << line;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("s.log:1: timestamp", 0), 0u) << e.what();
+    }
+  }
+  // The largest stamp that fits is read exactly.
+  const auto t = parse_candump_text("(9223372036853.000001) can0 100#00\n", "s.log", false);
+  EXPECT_EQ(t.frames.at(0).t_us, 9223372036853000001LL);
+}
+
+TEST(Dbc, OutOfRangeNumbersAndHugeLinesAreErrorsNamingTheLine) {
+  const std::string bo = "BO_ 1 A: 8 X\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {bo + " SG_ s : 4294967295|8@1+ (1,0) [0|1] \"\" X\n", "x.dbc:2: the start bit must be"},
+      {"BO_ 1 A: 100 X\n", "x.dbc:1: the DLC must be 0..64"},
+      {"BO_ 99999999999999999999 A: 8 X\n", "x.dbc:1: the message id must be"},
+      {bo + " SG_ s : 0|0@1+ (1,0) [0|1] \"\" X\n", "x.dbc:2: the length must be 1..64"},
+      {bo + " SG_ s : 0|8@1+ (1e999,0) [0|1] \"\" X\n", "x.dbc:2: expected the scale"},
+      {bo + " SG_ s : 0|8@1+ (0,0) [0|1] \"\" X\n", "x.dbc:2: the scale must not be 0"},
+      {bo + " SG_ s : 0|8@1+ (1,0) [0|1] \"unterminated\n", "x.dbc:2: the unit has no closing"},
+      {bo + " SG_ s : 0|8@1+ (1,0) [0|1] \"" + std::string(300000, 'u') + " X\n",
+       "x.dbc:2: the unit has no closing"},
+      {bo + " SG_ " + std::string(300000, 's') + " : 0|8@1+ (1,0) [0|1] \"\" X\n", ""},
+  };
+  for (const auto& [text, want] : cases) {
+    try {
+      const auto m = parse_dbc(text, "x.dbc");
+      EXPECT_EQ(want, "") << text.substr(0, 80);  // only the long name is valid
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(want, 0), 0u) << e.what();
+    }
+  }
+}

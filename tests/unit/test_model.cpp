@@ -4,6 +4,7 @@
 
 #include "core/curve_csv.hpp"
 #include "core/model_io.hpp"
+#include "core/toml_reader.hpp"
 #include "core/train.hpp"
 
 using namespace brakefit;
@@ -169,4 +170,47 @@ TEST(Identify, ShapeScaleIsTheLinearLeastSquaresD) {
   const MfParams p{12, 1.55, 3333, 0.1, 0, 0};
   const Curve c = sample_curve(p, even_slips(40, 0.3));
   EXPECT_NEAR(fit_scale_D(c, p.B, p.C, p.E), 3333, 1e-8);
+}
+
+// Found by a hostile operator (issue 12): clear errors naming the file, never UB or "internal".
+TEST(Model, HugeNumbersAndAnEmptyMapBehindAValidChecksumAreErrors) {
+  EXPECT_NE(load_error("{\"schema\": 1e999}").find("m.json: not a brakefit model"),
+            std::string::npos);
+  Model m = tiny_model();
+  const std::string text = serialize_model(m);
+  auto edited = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto pos = t.find(from);
+    EXPECT_NE(pos, std::string::npos) << from;
+    t.replace(pos, from.size(), to);
+    return resign_model_text(t);
+  };
+  EXPECT_NE(load_error(edited("\"rows\": 5", "\"rows\": 0")).find("SOM of 0 x 5 units"),
+            std::string::npos);
+  std::string no_hits = text;
+  const auto h = no_hits.find("\"unit_hits\"");
+  const auto open = no_hits.find('[', h), close = no_hits.find(']', h);
+  std::string zeros = "[";
+  for (int i = 0; i < 25; ++i) zeros += i ? ",0" : "0";
+  no_hits.replace(open, close - open + 1, zeros + "]");
+  EXPECT_NE(load_error(resign_model_text(no_hits)).find("no unit with training hits"),
+            std::string::npos);
+  // The re-signed original still loads: the checks above are what refused the others.
+  EXPECT_EQ(deserialize_model(resign_model_text(text), "m.json").hash, m.hash);
+}
+
+TEST(TrainConfig, NonUtf8AndControlCharactersAreRefusedBeforeTheTomlParser) {
+  for (const auto& [text, where] : std::vector<std::pair<std::string, std::string>>{
+           {"[som]\nrows = 5\xff\n", "t.toml:2:9: invalid UTF-8"},
+           {"[som]\nrows = \"\xed\xa0\x80\"\n", "t.toml:2:9: invalid UTF-8"},
+           {"[som]\x01\n", "t.toml:1:6: control character"},
+           {std::string("[som]\n\0", 8), "t.toml:2:1: control character"}}) {
+    try {
+      parse_train_config(text, "t.toml");
+      ADD_FAILURE() << text;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(where, 0), 0u) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(check_plain_text("# caf\xc3\xa9 \xf0\x9f\x9a\x97\tok\r\n", "t.toml"));
 }
