@@ -20,47 +20,19 @@
 #include <stdexcept>
 
 #include "daemon/admission.hpp"
+#include "daemon/modbus_gate.hpp"
 
 namespace brakefit::daemon {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr std::size_t kMaxAdu = 260;  // MBAP 7 + PDU 253
 
 modbus_t* mb(void* p) {
   return static_cast<modbus_t*>(p);
 }
 modbus_mapping_t* map(void* p) {
   return static_cast<modbus_mapping_t*>(p);
-}
-
-bool is_write(std::uint8_t fc) {
-  return fc == 5 || fc == 6 || fc == 15 || fc == 16 || fc == 22 || fc == 23;
-}
-
-/// True when the PDU length matches what the function code needs (libmodbus 3.1.6 trusts it).
-bool pdu_length_ok(const std::uint8_t* adu, std::size_t total) {
-  const std::uint8_t fc = adu[7];
-  const std::size_t len = total - 6;  // unit id + PDU
-  switch (fc) {
-    case 1:
-    case 2:
-    case 3:
-    case 4:
-    case 5:
-    case 6:
-      return len == 6;
-    case 15:
-    case 16:
-      return len >= 7 && adu[12] == len - 7;
-    case 22:
-      return len == 8;
-    case 23:
-      return len >= 11 && adu[16] == len - 11;
-    default:
-      return len >= 2;
-  }
 }
 
 }  // namespace
@@ -202,37 +174,33 @@ bool ModbusServer::handle(Client& c) {
   c.last_byte = now;
   auto* m = map(mapping_);
   while (c.buf.size() >= 8) {
-    const unsigned pid = (c.buf[2] << 8) | c.buf[3];
-    const unsigned len = (c.buf[4] << 8) | c.buf[5];
-    if (pid != 0 || len < 2 || len > kMaxAdu - 6) {
-      ++stats_.malformed;  // not Modbus TCP (or a lying MBAP length): drop the connection
-      return false;
-    }
-    const std::size_t total = 6 + len;
-    if (c.buf.size() < total) break;
-    std::array<std::uint8_t, kMaxAdu> adu{};  // zero padded: libmodbus never reads past it
-    std::copy_n(c.buf.begin(), total, adu.begin());
-    c.buf.erase(c.buf.begin(), c.buf.begin() + static_cast<std::ptrdiff_t>(total));
-    modbus_set_socket(mb(ctx_), c.fd);
-    const std::uint8_t fc = adu[7];
     bool allowed = false;
     {
       std::lock_guard lk(mu_);
       allowed = writable_ && std::find(allow_.begin(), allow_.end(), c.ip) != allow_.end();
     }
+    const GateDecision g = gate_request(c.buf.data(), c.buf.size(), allowed);
+    if (g.result == GateResult::NeedMore) break;
+    if (g.result == GateResult::Drop) {
+      ++stats_.malformed;  // not Modbus TCP (or a lying MBAP length): drop the connection
+      return false;
+    }
+    const std::size_t total = g.total;
+    std::array<std::uint8_t, kMaxAdu> adu{};  // zero padded: libmodbus never reads past it
+    std::copy_n(c.buf.begin(), total, adu.begin());
+    c.buf.erase(c.buf.begin(), c.buf.begin() + static_cast<std::ptrdiff_t>(total));
+    modbus_set_socket(mb(ctx_), c.fd);
+    const std::uint8_t fc = adu[7];
     int rc = 0;
     ++stats_.requests;
-    if (!pdu_length_ok(adu.data(), total)) {
+    if (g.result == GateResult::Exception) {
       ++stats_.exceptions;
-      rc = modbus_reply_exception(mb(ctx_), adu.data(), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
-    } else if (is_write(fc) && !allowed) {
-      ++stats_.exceptions;
-      rc = modbus_reply_exception(mb(ctx_), adu.data(), MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+      rc = modbus_reply_exception(mb(ctx_), adu.data(), g.exception);
     } else {
       std::array<std::uint16_t, kHoldingRegisters> before{};
       std::copy_n(m->tab_registers, kHoldingRegisters, before.begin());
       rc = modbus_reply(mb(ctx_), adu.data(), static_cast<int>(total), m);
-      if (is_write(fc)) {
+      if (is_write_function(fc)) {
         HoldingCommand cmd;
         const auto ca = reg("command").address;
         if (m->tab_registers[ca] != kCmdNone) {
