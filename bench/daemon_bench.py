@@ -55,16 +55,16 @@ def vm_hwm_kib(pid):
 
 
 class Run:
-    def __init__(self, build, tmp, logfile, speed, name):
+    def __init__(self, build, tmp, logfile, speed, name, extra_source="", extra_store=""):
         self.port = free_port()
         self.stats = os.path.join(tmp, f"{name}.stats.json")
         cfg = os.path.join(tmp, f"{name}.toml")
         bench = read_text(os.path.join(REC, "roller_2p2bar_fast.bench.toml"))
         with open(cfg, "w") as f:
             f.write(f'[daemon]\nmodel = "{ROOT}/data/models/default.json"\nstats_file = "{self.stats}"\n'
-                    f'[source]\nkind = "replay"\nfile = "{logfile}"\nspeed = {speed}\n{bench}\n'
+                    f'[source]\nkind = "replay"\nfile = "{logfile}"\nspeed = {speed}\n{extra_source}{bench}\n'
                     f'[modbus_tcp]\naddress = "127.0.0.1"\nport = {self.port}\n'
-                    f'[store]\npath = "{tmp}/{name}.db"\nmin_free_mb = 0\n')
+                    f'[store]\npath = "{tmp}/{name}.db"\nmin_free_mb = 0\n{extra_store}')
         self.probe = os.path.join(build, "tests", "modbus_probe")
         self.proc = subprocess.Popen([os.path.join(build, "daemon", "brakefitd"), "-c", cfg],
                                      stderr=subprocess.DEVNULL)

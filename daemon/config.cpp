@@ -30,7 +30,7 @@ std::vector<std::string> string_list(const TomlReader& rd, const toml::table& t,
 
 void parse_source(const TomlReader& rd, const toml::table& t, Config& c) {
   const std::string p = "source.";
-  rd.check_keys(t, p, {"kind", "file", "speed", "exit_at_end", "interface"});
+  rd.check_keys(t, p, {"kind", "file", "speed", "exit_at_end", "loop", "interface"});
   const std::string kind = rd.string(t, p, "kind", "replay");
   if (kind == "replay")
     c.kind = SourceKind::Replay;
@@ -46,6 +46,7 @@ void parse_source(const TomlReader& rd, const toml::table& t, Config& c) {
     rd.fail(p + "file", "required when kind = 'replay'");
   c.replay_speed = rd.number(t, p, "speed", c.replay_speed, 0, 1000);
   c.exit_at_end = rd.boolean(t, p, "exit_at_end", c.exit_at_end);
+  c.replay_loop = rd.boolean(t, p, "loop", c.replay_loop);
   c.can_interface = rd.string(t, p, "interface", c.can_interface);
   if (c.can_interface.empty() || c.can_interface.size() > 15)
     rd.fail(p + "interface", "expected a network interface name of 1 to 15 characters");

@@ -57,6 +57,7 @@ struct Config {
   std::string replay_file;
   double replay_speed = 1.0;  ///< 0: as fast as possible
   bool exit_at_end = false;
+  bool replay_loop = false;  ///< replay again and again, stamps shifted (soak benches)
   std::string can_interface = "can0";
   drivers::GpioConfig gpio;
   drivers::ModbusRtuConfig rtu;

@@ -78,7 +78,8 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
           throw DaemonError(kExitUnavailable, fmt::format("source: {}: cannot open: {}",
                                                           cfg_.replay_file, std::strerror(errno)));
         try {  // there and readable: what is wrong now is its content (65, naming the line)
-          source_ = std::make_unique<drivers::ReplaySource>(cfg_.replay_file, cfg_.replay_speed);
+          source_ = std::make_unique<drivers::ReplaySource>(cfg_.replay_file, cfg_.replay_speed,
+                                                           cfg_.replay_loop);
         } catch (const InputError& e) {
           throw DaemonError(kExitDataError, fmt::format("source: {}", e.what()));
         }

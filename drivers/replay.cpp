@@ -12,18 +12,24 @@
 
 namespace brakefit::drivers {
 
-ReplaySource::ReplaySource(const std::string& path, double speed)
-    : path_(path), speed_(speed), frames_(read_candump_file(path).frames) {
+ReplaySource::ReplaySource(const std::string& path, double speed, bool loop)
+    : path_(path), speed_(speed), loop_(loop), frames_(read_candump_file(path).frames) {
   t0_ = std::chrono::steady_clock::now();
 }
 
 std::optional<can::LoggedFrame> ReplaySource::next(int timeout_ms) {
+  if (pos_ >= frames_.size() && loop_ && !frames_.empty()) {
+    pos_ = 0;
+    ++loops_;
+    shift_us_ += frames_.back().t_us - frames_.front().t_us + 1'000'000;
+  }
   if (pos_ >= frames_.size()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(timeout_ms));
     return std::nullopt;
   }
   if (speed_ > 0) {
-    const double log_s = static_cast<double>(frames_[pos_].t_us - frames_.front().t_us) * 1e-6;
+    const double log_s =
+        static_cast<double>(frames_[pos_].t_us + shift_us_ - frames_.front().t_us) * 1e-6;
     const auto due = t0_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                std::chrono::duration<double>(log_s / speed_));
     const auto limit = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
@@ -37,7 +43,9 @@ std::optional<can::LoggedFrame> ReplaySource::next(int timeout_ms) {
     if (due > std::chrono::steady_clock::now()) std::this_thread::sleep_until(due + kCoalesce);
   }
   ++counters_.frames;
-  return frames_[pos_++];
+  can::LoggedFrame f = frames_[pos_++];
+  f.t_us += shift_us_;
+  return f;
 }
 
 LocalLiveSource::LocalLiveSource(

@@ -17,17 +17,23 @@ class ReplaySource final : public FrameSource {
  public:
   /// speed: 1.0 real time, 2.0 twice as fast; 0 as fast as possible. Throws InputError naming the
   /// file and line for a malformed log.
-  ReplaySource(const std::string& path, double speed);
+  /// loop: start again at the end, time stamps shifted past the last one plus a second (soak
+  /// benches: hours of data from one log); never finished.
+  ReplaySource(const std::string& path, double speed, bool loop = false);
   std::optional<can::LoggedFrame> next(int timeout_ms) override;
-  bool finished() const override { return pos_ >= frames_.size(); }
+  bool finished() const override { return !loop_ && pos_ >= frames_.size(); }
+  std::uint64_t loops() const { return loops_; }
   static constexpr std::chrono::milliseconds kCoalesce{1};
   std::string describe() const override { return "replay " + path_; }
 
  private:
   std::string path_;
   double speed_;
+  bool loop_;
   std::vector<can::LoggedFrame> frames_;
   std::size_t pos_ = 0;
+  std::uint64_t loops_ = 0;
+  std::int64_t shift_us_ = 0;  ///< added to every stamp of the current pass
   std::chrono::steady_clock::time_point t0_;
 };
 

@@ -105,8 +105,8 @@ std::optional<LoggedFrame> parse_candump_line(std::string_view line) {
       r2.ptr != ts.data() + ts.size() || ts.front() == '-' || ts[dot + 1] == '-')
     throw CandumpError(
         fmt::format("timestamp '({})' is not (seconds.microseconds) of digits", std::string(ts)));
-  // Seconds times 10^6 must fit the microsecond count (year 294 000); candump never writes more.
-  constexpr std::int64_t kMaxSeconds = std::numeric_limits<std::int64_t>::max() / 1000000 - 1;
+  // The pipeline counts nanoseconds in 64 bits: stamps up to 9e9 s (year 2255) fit with room.
+  constexpr std::int64_t kMaxSeconds = 9'000'000'000;
   if (sec > kMaxSeconds)
     throw CandumpError(fmt::format("timestamp '({})' is out of range", std::string(ts)));
   std::string_view rest = line.substr(close + 1);

@@ -181,12 +181,16 @@ double decode_signal(const Frame& f, const SignalDef& s) {
 }
 
 void encode_signal(Frame& f, const SignalDef& s, double physical) {
+  if (s.length == 0 || s.length > 64) return;  // parse_dbc rejects these
   double r = std::round((physical - s.offset) / s.scale);
-  const double lo = s.is_signed ? -std::ldexp(1.0, static_cast<int>(s.length) - 1) : 0.0;
-  const double hi = s.is_signed ? std::ldexp(1.0, static_cast<int>(s.length) - 1) - 1
-                                : std::ldexp(1.0, static_cast<int>(s.length)) - 1;
+  if (std::isnan(r)) r = 0;
+  // The largest doubles that convert exactly (2^63 - 1 and 2^64 - 1 round up to 2^63 and 2^64).
+  const int bits = static_cast<int>(s.length) - (s.is_signed ? 1 : 0);
+  const double lo = s.is_signed ? -std::ldexp(1.0, bits) : 0.0;
+  const double hi = std::min(std::ldexp(1.0, bits) - 1, std::nextafter(std::ldexp(1.0, bits), 0.0));
   r = std::min(std::max(r, lo), hi);
-  const auto raw = static_cast<std::uint64_t>(static_cast<std::int64_t>(r));
+  const auto raw = s.is_signed ? static_cast<std::uint64_t>(static_cast<std::int64_t>(r))
+                               : static_cast<std::uint64_t>(r);
   for (unsigned i = 0; i < s.length; ++i) {
     const unsigned bit = s.start_bit + i;
     auto& byte = f.data[bit / 8];

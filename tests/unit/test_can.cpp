@@ -155,9 +155,28 @@ TEST(Candump, StampsThatOverflowOrAreNegativeAreErrors) {
       EXPECT_EQ(std::string(e.what()).rfind("s.log:1: timestamp", 0), 0u) << e.what();
     }
   }
-  // The largest stamp that fits is read exactly.
-  const auto t = parse_candump_text("(9223372036853.000001) can0 100#00\n", "s.log", false);
-  EXPECT_EQ(t.frames.at(0).t_us, 9223372036853000001LL);
+  // Stamps up to 9e9 s (nanoseconds still fit 64 bits in the pipeline) are read exactly.
+  const auto t = parse_candump_text("(9000000000.000001) can0 100#00\n", "s.log", false);
+  EXPECT_EQ(t.frames.at(0).t_us, 9000000000000001LL);
+  EXPECT_THROW(parse_candump_text("(9000000001.000000) can0 100#00\n", "s.log", false), InputError);
+}
+
+TEST(Dbc, SixtyFourBitSignalsEncodeTheirExtremesWithoutOverflow) {
+  for (bool is_signed : {false, true}) {
+    SignalDef s;
+    s.start_bit = 0;
+    s.length = 64;
+    s.is_signed = is_signed;
+    Frame f;
+    f.len = 8;
+    encode_signal(f, s, 1e30);  // clamped to the largest raw value
+    EXPECT_EQ(f.data[6], 0xFF);
+    EXPECT_EQ(f.data[7], is_signed ? 0x7F : 0xFF);
+    encode_signal(f, s, -1e30);
+    EXPECT_EQ(f.data[7], is_signed ? 0x80 : 0x00);
+    encode_signal(f, s, std::nan(""));
+    EXPECT_EQ(f.data[7], 0x00);
+  }
 }
 
 TEST(Dbc, OutOfRangeNumbersAndHugeLinesAreErrorsNamingTheLine) {
