@@ -176,6 +176,7 @@ void Daemon::post_status(Clock::time_point now) {
   w.u32("rtu_reconnects", static_cast<std::uint32_t>(c.rtu_reconnects.load()));
   w.u32("counter_gaps", static_cast<std::uint32_t>(st.counter_gaps));
   w.u32("unknown_ids", static_cast<std::uint32_t>(st.unknown_ids));
+  w.u32("encoder_resyncs", static_cast<std::uint32_t>(st.encoder_resyncs));
   w.u32("queue_drops", static_cast<std::uint32_t>(c.queue_drops.load()));
   w.u16("events_waiting",
         static_cast<std::uint16_t>(std::min<std::size_t>(pending_->size(), 65535)));

@@ -47,6 +47,8 @@ std::vector<RegisterDef> build_map() {
        "finished events dropped: the store and the spill directory both failed past max_held"},
       {"modbus_rejected", T::Input, 33, 2, Y::U32, "",
        "Modbus TCP connections refused or evicted (per-address limit, max_clients)"},
+      {"encoder_resyncs", T::Input, 35, 2, Y::U32, "",
+       "encoder edge clocks that went back while counts moved (a bench that restarted)"},
       {"v_ref_mps", T::Input, 40, 2, Y::F32, "m/s",
        "reference speed (roller surface or fifth wheel)"},
       {"v_wheel_mps", T::Input, 42, 2, Y::F32, "m/s", "tested wheel circumferential speed"},

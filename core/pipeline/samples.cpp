@@ -22,6 +22,14 @@ double EncoderSpeed::update(const can::EncoderMsg& m, std::int64_t t_ns) {
     last_count_ = m.count_x4_mod;
     last_edge_us_ = m.edge_time_us;
     last_edge_frame_ns_ = t_ns;
+  } else if (dcount != 0) {
+    // Counts moved but the edge clock did not advance: the sender restarted its clock (or the
+    // log was joined). Without this the speed would read 0 until the clock caught up (up to
+    // 2^32 us, 71 minutes). Start again from this frame; the speed holds meanwhile.
+    ++resyncs_;
+    last_count_ = m.count_x4_mod;
+    last_edge_us_ = m.edge_time_us;
+    last_edge_frame_ns_ = t_ns;
   } else {
     // No new edge: the speed is at most one count over the time since the last edge.
     const double since_s = static_cast<double>(t_ns - last_edge_frame_ns_) * 1e-9;
@@ -71,6 +79,7 @@ std::optional<Sample> SampleBuilder::feed(const can::LoggedFrame& f) {
     if (is_ref) {
       cur_.v_ref_mps = ref_.update(*e, t_ns);
       have_ref_ = true;
+      stats_.encoder_resyncs = ref_.resyncs() + wheel_.resyncs();
     } else if (e->channel == can::Channel::Wheel) {
       if (last_wheel_counter_ >= 0 &&
           e->counter != static_cast<std::uint8_t>(last_wheel_counter_ + 1))
@@ -78,6 +87,7 @@ std::optional<Sample> SampleBuilder::feed(const can::LoggedFrame& f) {
       last_wheel_counter_ = e->counter;
       if (pending_) out = take_pending();  // the previous cycle is complete
       cur_.v_wheel_mps = wheel_.update(*e, t_ns);
+      stats_.encoder_resyncs = ref_.resyncs() + wheel_.resyncs();
       pending_ = true;
       pending_t_ns_ = t_ns;
     }

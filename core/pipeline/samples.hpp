@@ -29,10 +29,14 @@ class EncoderSpeed {
   /// Updates with a frame received at t_ns; returns the speed in m/s.
   double update(const can::EncoderMsg& m, std::int64_t t_ns);
   double speed_mps() const { return speed_; }
+  /// Times the sender's edge clock went backwards while counts moved (a bench controller that
+  /// restarted): the new count and edge time became the reference.
+  std::size_t resyncs() const { return resyncs_; }
 
  private:
   double m_per_count_;
   bool init_ = false;
+  std::size_t resyncs_ = 0;
   std::uint32_t last_count_ = 0, last_edge_us_ = 0;
   std::int64_t last_edge_frame_ns_ = 0;
   double speed_ = 0.0;
@@ -43,6 +47,7 @@ struct SampleStats {
   std::size_t unknown_ids = 0;  ///< counted and ignored
   std::size_t samples = 0;
   std::size_t counter_gaps = 0;  ///< lost frames detected by rolling counters
+  std::size_t encoder_resyncs = 0;  ///< encoder edge clocks that restarted (EncoderSpeed::resyncs)
 };
 
 /// A sample is emitted once its time group is complete: at the next wheel-encoder frame or at the

@@ -202,3 +202,26 @@ TEST(Dbc, OutOfRangeNumbersAndHugeLinesAreErrorsNamingTheLine) {
     }
   }
 }
+
+// A bench controller that restarts its edge clock (or a log joined to itself): the speed comes
+// back at once instead of reading 0 until the clock catches up (up to 71 minutes).
+TEST(EncoderSpeed, AnEdgeClockThatGoesBackIsAResyncNotAnHourOfZeroSpeed) {
+  brakefit::pipeline::EncoderSpeed sp(1000, 0.1);
+  const double m_per_count = 2.0 * M_PI * 0.1 / 4000.0;
+  EncoderMsg m{Channel::Roller, 0, 5'000'000, 0};
+  std::int64_t t_ns = 0;
+  auto step = [&](std::uint32_t counts, std::uint32_t dt_us) {
+    m.count_x4_mod = (m.count_x4_mod + counts) & 0xFFFFFFu;
+    m.edge_time_us += dt_us;
+    t_ns += dt_us * 1000LL;
+    return sp.update(m, t_ns);
+  };
+  for (int i = 0; i < 10; ++i) step(14, 1000);
+  EXPECT_NEAR(sp.speed_mps(), 14 * m_per_count / 1e-3, 1e-9);
+  m.edge_time_us = 100;  // the clock restarts; counts jump too
+  m.count_x4_mod = 77;
+  t_ns += 1'000'000;
+  sp.update(m, t_ns);
+  EXPECT_EQ(sp.resyncs(), 1u);
+  EXPECT_NEAR(step(7, 1000), 7 * m_per_count / 1e-3, 1e-9);  // the next frame has the speed
+}
