@@ -55,7 +55,8 @@ def vm_hwm_kib(pid):
 
 
 class Run:
-    def __init__(self, build, tmp, logfile, speed, name, extra_source="", extra_store=""):
+    def __init__(self, build, tmp, logfile, speed, name, extra_source="", extra_store="",
+                 store=None, stderr=subprocess.DEVNULL):
         self.port = free_port()
         self.stats = os.path.join(tmp, f"{name}.stats.json")
         cfg = os.path.join(tmp, f"{name}.toml")
@@ -64,10 +65,10 @@ class Run:
             f.write(f'[daemon]\nmodel = "{ROOT}/data/models/default.json"\nstats_file = "{self.stats}"\n'
                     f'[source]\nkind = "replay"\nfile = "{logfile}"\nspeed = {speed}\n{extra_source}{bench}\n'
                     f'[modbus_tcp]\naddress = "127.0.0.1"\nport = {self.port}\n'
-                    f'[store]\npath = "{tmp}/{name}.db"\nmin_free_mb = 0\n{extra_store}')
+                    f'[store]\npath = "{store or os.path.join(tmp, name + ".db")}"\nmin_free_mb = 0\n{extra_store}')
         self.probe = os.path.join(build, "tests", "modbus_probe")
         self.proc = subprocess.Popen([os.path.join(build, "daemon", "brakefitd"), "-c", cfg],
-                                     stderr=subprocess.DEVNULL)
+                                     stderr=stderr)
         for _ in range(200):
             try:
                 socket.create_connection(("127.0.0.1", self.port), 0.2).close()

@@ -110,7 +110,7 @@ Model deserialize_model(std::string_view text, const std::string& source) {
   } catch (const json::exception& e) {  // e.g. a number beyond double (1e999)
     throw fail(fmt::format("not a brakefit model: {}", e.what()));
   }
-  if (!body.is_object() || body.value("schema", "") != kModelSchema)
+  if (!body.is_object() || !body.contains("schema") || body["schema"] != kModelSchema)
     throw fail(fmt::format("not a brakefit model (schema is not '{}')", kModelSchema));
   if (!body.contains("format_version") || !body["format_version"].is_number_integer() ||
       body["format_version"].get<int>() != kModelFormatVersion)

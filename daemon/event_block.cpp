@@ -34,7 +34,7 @@ std::uint16_t event_seq(std::int64_t id) {
 
 RegisterWrites event_block(const std::string& result_json, std::int64_t id, bool samples_stored) {
   const auto doc = nlohmann::json::parse(result_json);
-  if (doc.value("schema", "") != "brakefit.event/1")
+  if (!doc.is_object() || !doc.contains("schema") || doc["schema"] != "brakefit.event/1")
     throw std::invalid_argument("stored result is not a brakefit.event/1 document");
   std::uint16_t flags = 0;
   for (const auto& f : doc.at("flags")) {
@@ -65,7 +65,7 @@ RegisterWrites event_block(const std::string& result_json, std::int64_t id, bool
   for (const char* m : kMethodBlocks) {
     const nlohmann::json* r = nullptr;
     for (const auto& x : results)
-      if (x.value("method", "") == m) r = &x;
+      if (x.is_object() && x.contains("method") && x["method"] == m) r = &x;
     for (const char* f : fields)
       w.f32(fmt::format("event.{}.{}", m, f).c_str(), r ? number_or_nan(*r, f) : std::nan(""));
   }

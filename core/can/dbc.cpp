@@ -171,12 +171,14 @@ std::uint64_t extract_raw(const Frame& f, const SignalDef& s) {
 double decode_signal(const Frame& f, const SignalDef& s) {
   if (s.length == 0 || s.length > 64)
     return s.offset;  // parse_dbc rejects these; stay defined anyway
-  const std::uint64_t raw = extract_raw(f, s);
+  std::uint64_t raw = extract_raw(f, s);
   double v;
-  if (s.is_signed && s.length < 64 && (raw >> (s.length - 1)) & 1u)
-    v = static_cast<double>(static_cast<std::int64_t>(raw) - (std::int64_t{1} << s.length));
-  else
+  if (s.is_signed) {  // sign-extend, then two's complement (defined in C++20), any length to 64
+    if (s.length < 64 && (raw >> (s.length - 1)) & 1u) raw |= ~std::uint64_t{0} << s.length;
+    v = static_cast<double>(static_cast<std::int64_t>(raw));
+  } else {
     v = static_cast<double>(raw);
+  }
   return v * s.scale + s.offset;
 }
 

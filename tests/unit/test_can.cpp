@@ -177,6 +177,18 @@ TEST(Dbc, SixtyFourBitSignalsEncodeTheirExtremesWithoutOverflow) {
     encode_signal(f, s, std::nan(""));
     EXPECT_EQ(f.data[7], 0x00);
   }
+  // Signed decoding of every length up to 64 bits (63 and 64 once overflowed).
+  for (unsigned len : {8u, 63u, 64u}) {
+    SignalDef s;
+    s.length = len;
+    s.is_signed = true;
+    Frame f;
+    f.len = 8;
+    f.data.fill(0xFF);
+    EXPECT_EQ(decode_signal(f, s), -1.0) << len;
+    encode_signal(f, s, -std::ldexp(1.0, static_cast<int>(len) - 1));
+    EXPECT_EQ(decode_signal(f, s), -std::ldexp(1.0, static_cast<int>(len) - 1)) << len;
+  }
 }
 
 TEST(Dbc, OutOfRangeNumbersAndHugeLinesAreErrorsNamingTheLine) {

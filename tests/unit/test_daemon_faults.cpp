@@ -3,6 +3,7 @@
 // spill files, their order, a restart finding them), and the last-event block rebuilt from a
 // stored row (what a restart restores).
 #include <gtest/gtest.h>
+#include <modbus.h>
 #include <sqlite3.h>
 #include <sys/stat.h>
 
@@ -14,6 +15,7 @@
 #include "core/event_json.hpp"
 #include "daemon/admission.hpp"
 #include "daemon/event_block.hpp"
+#include "daemon/modbus_gate.hpp"
 #include "daemon/modbus_server.hpp"
 #include "daemon/pending.hpp"
 #include "daemon/registers.hpp"
@@ -304,4 +306,70 @@ TEST(EventBlock, IsBuiltFromTheStoredDocumentAndSeqFollowsTheRowId) {
   const auto b = reg("event.lm.B").address;
   EXPECT_TRUE(std::isnan(unpack_f32_abcd(regs[b], regs[b + 1])));
   EXPECT_THROW(event_block("{\"schema\":\"other\"}", 1, true), std::exception);
+}
+
+TEST(ModbusGate, CutsRequestsAndAnswersWhatLibmodbusWouldSleepOn) {
+  auto req = [](const std::vector<std::uint8_t>& pdu) {
+    std::vector<std::uint8_t> a(7 + pdu.size(), 0);
+    a[1] = 1;
+    a[5] = static_cast<std::uint8_t>(pdu.size() + 1);
+    a[6] = 1;
+    for (std::size_t i = 0; i < pdu.size(); ++i) a[7 + i] = pdu[i];
+    return a;
+  };
+  auto gate = [](const std::vector<std::uint8_t>& a, bool allowed = false) {
+    return gate_request(a.data(), a.size(), allowed);
+  };
+  EXPECT_EQ(gate(req({4, 0, 100, 0, 69})).result, GateResult::Pass);
+  EXPECT_EQ(gate(req({4, 0, 100, 0, 69})).total, 12u);
+  auto partial = req({4, 0, 100, 0, 69});
+  partial.pop_back();
+  EXPECT_EQ(gate(partial).result, GateResult::NeedMore);
+  auto lying = req({4, 0, 100, 0, 69});
+  lying[5] = 255;
+  EXPECT_EQ(gate(lying).result, GateResult::Drop);
+  for (const auto& [pdu, exc] : std::vector<std::pair<std::vector<std::uint8_t>, int>>{
+           {{4, 0, 0, 0, 0}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},     // 0 registers
+           {{3, 0, 0, 0, 126}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},   // 126 registers
+           {{1, 0, 0, 0x07, 0xD1}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},  // 2001 coils
+           {{5, 0, 0, 0x12, 0x34}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},  // coil value
+           {{16, 0, 0, 0, 2, 3, 1, 2, 3}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},  // byte count
+           {{0x2B, 0x0E, 1, 0}, MODBUS_EXCEPTION_ILLEGAL_FUNCTION},  // unknown function
+           {{6, 0, 0, 0, 1}, MODBUS_EXCEPTION_ILLEGAL_FUNCTION},     // write, not allowed
+       }) {
+    const auto g = gate(req(pdu));
+    EXPECT_EQ(g.result, GateResult::Exception) << int(pdu[0]);
+    EXPECT_EQ(g.exception, exc) << int(pdu[0]);
+  }
+  EXPECT_EQ(gate(req({6, 0, 0, 0, 1}), true).result, GateResult::Pass);
+  EXPECT_EQ(gate(req({16, 0, 2, 0, 2, 4, 0x41, 0x42, 0x31, 0x32}), true).result, GateResult::Pass);
+}
+
+TEST(ModbusServer, RequestsLibmodbusWouldSleepOnDoNotStallOtherClients) {
+  ModbusTcpConfig c;
+  c.address = "127.0.0.1";
+  c.port = 0;
+  ModbusServer srv(c);
+  srv.start();
+  const int bad = raw_connect(srv.port(), "127.0.0.1");
+  const int good = raw_connect(srv.port(), "127.0.0.2");
+  std::vector<std::uint8_t> burst;
+  for (std::uint8_t i = 0; i < 10; ++i)  // "read 0 registers": libmodbus sleeps 0.5 s on each
+    burst.insert(burst.end(), {0, i, 0, 0, 0, 6, 1, 4, 0, 0, 0, 0});
+  ASSERT_EQ(::send(bad, burst.data(), burst.size(), 0), static_cast<ssize_t>(burst.size()));
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const auto t0 = Clock::now();
+  const std::uint8_t req[] = {0, 42, 0, 0, 0, 6, 1, 4, 0, 0, 0, 1};
+  ASSERT_EQ(::send(good, req, sizeof req, 0), static_cast<ssize_t>(sizeof req));
+  const auto r = raw_recv(good, 3000);
+  const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  ASSERT_EQ(r.size(), 11u);
+  EXPECT_LT(ms, 100.0);
+  const auto e = raw_recv(bad, 1000);  // the bad client got its exceptions at once
+  ASSERT_GE(e.size(), 9u);
+  EXPECT_EQ(e[7], 0x84);
+  EXPECT_EQ(e[8], MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  ::close(bad);
+  ::close(good);
+  srv.stop();
 }
