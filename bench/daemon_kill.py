@@ -18,6 +18,7 @@ import os
 import random
 import re
 import sqlite3
+import subprocess
 import sys
 import tempfile
 import time
@@ -108,10 +109,9 @@ def main():
         log(f"kill {k + 1:2d} at {t_kill:4.2f} s{' (event running)' if active else ''}: "
             f"{finished} finished, {new_rows} rows added, {len(shown)} shown, {missing} shown but "
             f"not stored, {spilled} spilled, integrity {ok}, lost {lost}")
-    doc = {"schema": "brakefit.daemon_kill/1",
-           "version": json.loads(read_text(os.path.join(ROOT, "build", "release", "generated", "brakefit", "version.json")))["version"]
-           if os.path.exists(os.path.join(ROOT, "build", "release", "generated", "brakefit", "version.json")) else None,
-           **totals}
+    version = subprocess.run([os.path.join(args.build, "daemon", "brakefitd"), "--version"],
+                             capture_output=True, text=True).stdout.split()[-1]
+    doc = {"schema": "brakefit.daemon_kill/1", "version": version, "seed": args.seed, **totals}
     print(f"kills      : {totals['kills']} ({totals['killed_during_event']} during an event)")
     print(f"published  : {totals['published']} event ids shown, {totals['published_missing']} not in the store "
           f"(target 0)")
