@@ -27,6 +27,7 @@ namespace brakefit::daemon {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+constexpr std::size_t kMaxLatencies = 10000;
 
 modbus_t* mb(void* p) {
   return static_cast<modbus_t*>(p);
@@ -142,6 +143,10 @@ void ModbusServer::apply_pending() {
       const double us = std::chrono::duration<double, std::micro>(Clock::now() - *closed).count();
       std::lock_guard lk(mu_);
       latencies_us_.push_back(us);
+      // A station runs for years: keep the newest latencies only (bounded memory).
+      if (latencies_us_.size() > 2 * kMaxLatencies)
+        latencies_us_.erase(latencies_us_.begin(),
+                            latencies_us_.end() - static_cast<std::ptrdiff_t>(kMaxLatencies));
     }
   }
   m->tab_input_registers[reg("modbus_clients").address] =
