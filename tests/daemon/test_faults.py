@@ -236,6 +236,22 @@ class FaultTest(unittest.TestCase):
                               f'[store]\npath = "{afile}/sub/e.db"\n')
         self.assertEqual(out.returncode, 73, out.stderr)
         self.assertIn("Not a directory", out.stderr)
+        # A directory the service user may not write: "Permission denied", not SQLite's "unable
+        # to open database file". Run as nobody (root writes anywhere).
+        if os.geteuid() == 0 and shutil.which("setpriv"):
+            locked = os.path.join(self.tmp, "rootonly")
+            os.mkdir(locked, 0o755)
+            os.chmod(self.tmp, 0o755)
+            path = os.path.join(self.tmp, "one.toml")
+            with open(path, "w") as f:
+                f.write(f'[source]\nkind = "replay"\nfile = "{good}"\n{common}'
+                        f'[store]\npath = "{locked}/e.db"\n')
+            os.chmod(path, 0o644)
+            out = subprocess.run(["setpriv", "--reuid=nobody", "--regid=nogroup", "--clear-groups",
+                                  test_daemon.DAEMON, "--config", path], capture_output=True,
+                                 text=True, timeout=30)
+            self.assertEqual(out.returncode, 73, out.stderr)
+            self.assertIn("Permission denied", out.stderr)
         # A model beyond double and a config that is not text: 78 naming the file.
         model = os.path.join(self.tmp, "m.json")
         with open(model, "w") as f:
