@@ -61,7 +61,9 @@ class FaultTest(unittest.TestCase):
         self.assertEqual(len(os.listdir(store + ".spill")), 3)
         lock.rollback()
         lock.close()
-        r = self.wait_until(d, lambda r: r["event.seq"] == 3, timeout=15, what="publication")
+        # The block is posted with each commit, the counters with the next status (<= 50 ms).
+        r = self.wait_until(d, lambda r: r["event.seq"] == 3 and r["events_waiting"] == 0,
+                            timeout=15, what="publication")
         self.assertEqual(r["event.id"], 3)
         self.assertEqual(r["events_waiting"], 0)
         self.assertFalse(r["status_flags"] & ((1 << 7) | (1 << 10)))
