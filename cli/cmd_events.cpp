@@ -84,7 +84,8 @@ void add_events_command(CLI::App& app) {
       const auto doc = nlohmann::json::parse(e.result_json, nullptr, false);
       if (doc.is_object() && doc.contains("results"))
         for (const auto& r : doc["results"])
-          if (r.is_object() && r.contains("method") && r["method"] == "hybrid" && r.contains("B") && r["B"].is_number())
+          if (r.is_object() && r.contains("method") && r["method"] == "hybrid" && r.contains("B") &&
+              r["B"].is_number())
             fit = fmt::format("{:.3f} {:.4f} {:.1f} {:.4f}", r["B"].get<double>(),
                               r["C"].get<double>(), r["D"].get<double>(), r["E"].get<double>());
       std::cout << fmt::format("{:>6}  {:<10}  {:<16}  {:<6}  {:<15}  {:<14}  {:>5}  {}\n", e.id,

@@ -54,7 +54,8 @@ nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::str
   j["points"] = e.curve.size();
   j["max_slip_ratio"] = num(e.curve.max_slip_ratio());
   double max_force_n = std::nan("");
-  for (double f : e.curve.force_n) max_force_n = std::isnan(max_force_n) ? f : std::max(max_force_n, f);
+  for (double f : e.curve.force_n)
+    max_force_n = std::isnan(max_force_n) ? f : std::max(max_force_n, f);
   j["max_force_n"] = num(max_force_n);
   j["mape_rule"] = kMapeRule;
   j["results"] = nlohmann::ordered_json::array();

@@ -79,7 +79,7 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
                                                           cfg_.replay_file, std::strerror(errno)));
         try {  // there and readable: what is wrong now is its content (65, naming the line)
           source_ = std::make_unique<drivers::ReplaySource>(cfg_.replay_file, cfg_.replay_speed,
-                                                           cfg_.replay_loop);
+                                                            cfg_.replay_loop);
         } catch (const InputError& e) {
           throw DaemonError(kExitDataError, fmt::format("source: {}", e.what()));
         }
@@ -107,8 +107,7 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
       throw DaemonError(kExitCantCreate, e.what());
     }
   }
-  pipeline_ = std::make_unique<pipeline::Pipeline>(cfg_.calibration, cfg_.pipeline,
-                                                   model_.get());
+  pipeline_ = std::make_unique<pipeline::Pipeline>(cfg_.calibration, cfg_.pipeline, model_.get());
   pending_ = std::make_unique<PendingEvents>(cfg_.store.path + ".spill",
                                              static_cast<std::size_t>(cfg_.store.hold_in_memory),
                                              static_cast<std::size_t>(cfg_.store.max_held));
@@ -200,14 +199,12 @@ void Daemon::notify_status() {
   if (f & kStatusRefEncoderMissing) missing.push_back("reference encoder");
   if (f & kStatusWheelEncoderMissing) missing.push_back("wheel encoder");
   if (f & kStatusPressureMissing) missing.push_back("pressure");
-  std::string s =
-      fmt::format("{} events; {}; sensors {}{}{}{}", events_finished_, source_->describe(),
-                  missing.empty() ? "ok" : fmt::format("missing: {}", fmt::join(missing, ", ")),
-                  store_->degraded() ? "; store degraded (samples not stored)" : "",
-                  pending_->size() ? fmt::format("; {} event(s) waiting for the store",
-                                                 pending_->size())
-                                   : "",
-                  source_finished_ ? "; replay finished" : "");
+  std::string s = fmt::format(
+      "{} events; {}; sensors {}{}{}{}", events_finished_, source_->describe(),
+      missing.empty() ? "ok" : fmt::format("missing: {}", fmt::join(missing, ", ")),
+      store_->degraded() ? "; store degraded (samples not stored)" : "",
+      pending_->size() ? fmt::format("; {} event(s) waiting for the store", pending_->size()) : "",
+      source_finished_ ? "; replay finished" : "");
   if (s == last_status_) return;
   last_status_ = s;
   sd_notify(0, ("STATUS=" + s).c_str());

@@ -98,15 +98,17 @@ GateDecision gate_request(const std::uint8_t* buf, std::size_t n, bool write_all
   }
   d.total = 6 + len;
   if (n < d.total) return d;
-  if (!known_function(buf[7])) {
+  // An unknown function, or a write from a client that may not write: 01; a malformed known
+  // request: 03. Everything else passes to libmodbus.
+  const bool known = known_function(buf[7]);
+  const bool refused_write = is_write_function(buf[7]) && !write_allowed;
+  const bool well_formed = known && pdu_length_ok(buf, d.total) && quantities_ok(buf);
+  if (!known || (well_formed && refused_write)) {
     d.result = GateResult::Exception;
     d.exception = MODBUS_EXCEPTION_ILLEGAL_FUNCTION;
-  } else if (!pdu_length_ok(buf, d.total) || !quantities_ok(buf)) {
+  } else if (!well_formed) {
     d.result = GateResult::Exception;
     d.exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-  } else if (is_write_function(buf[7]) && !write_allowed) {
-    d.result = GateResult::Exception;
-    d.exception = MODBUS_EXCEPTION_ILLEGAL_FUNCTION;
   } else {
     d.result = GateResult::Pass;
   }

@@ -3,11 +3,11 @@
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 #include <modbus.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <spdlog/spdlog.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -245,11 +245,11 @@ void ModbusServer::note_rejection(const std::string& what) {
   const auto now = Clock::now();
   ++rejections_unlogged_;
   if (now - last_rejection_log_ < std::chrono::seconds(1)) return;
-  spdlog::warn("modbus_tcp: {}{}", what,
-               rejections_unlogged_ > 1
-                   ? fmt::format(" ({} refusals/evictions since the last message)",
-                                 rejections_unlogged_)
-                   : "");
+  spdlog::warn(
+      "modbus_tcp: {}{}", what,
+      rejections_unlogged_ > 1
+          ? fmt::format(" ({} refusals/evictions since the last message)", rejections_unlogged_)
+          : "");
   rejections_unlogged_ = 0;
   last_rejection_log_ = now;
 }

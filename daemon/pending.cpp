@@ -59,7 +59,9 @@ bool write_durably(const std::string& path, const std::string& bytes, std::strin
 
 PendingEvents::PendingEvents(std::string spill_dir, std::size_t hold_in_memory,
                              std::size_t max_in_memory)
-    : dir_(std::move(spill_dir)), hold_(hold_in_memory), cap_(std::max<std::size_t>(1, max_in_memory)) {}
+    : dir_(std::move(spill_dir)),
+      hold_(hold_in_memory),
+      cap_(std::max<std::size_t>(1, max_in_memory)) {}
 
 std::size_t PendingEvents::adopt_spilled() {
   std::error_code ec;
@@ -100,9 +102,10 @@ void PendingEvents::push(EventRecord r) {
   memory_.push_back(std::move(r));
   while (memory_.size() > cap_) {
     ++lost_;
-    spdlog::error("event (pipeline id {}) lost: the store and the spill directory {} both fail and "
-                  "{} events are already held in memory",
-                  memory_.front().pipeline_event_id, dir_, cap_);
+    spdlog::error(
+        "event (pipeline id {}) lost: the store and the spill directory {} both fail and "
+        "{} events are already held in memory",
+        memory_.front().pipeline_event_id, dir_, cap_);
     memory_.pop_front();
   }
 }
@@ -132,7 +135,8 @@ void PendingEvents::pop() {
   if (!files_.empty()) {
     std::error_code ec;
     fs::remove(files_.front(), ec);
-    if (ec) spdlog::error("{}: cannot remove the committed spill file: {}", files_.front(), ec.message());
+    if (ec)
+      spdlog::error("{}: cannot remove the committed spill file: {}", files_.front(), ec.message());
     files_.pop_front();
     loaded_.reset();
     return;

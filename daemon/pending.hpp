@@ -47,7 +47,7 @@ class PendingEvents {
   std::string dir_;
   std::size_t hold_, cap_;
   std::deque<EventRecord> memory_;
-  std::deque<std::string> files_;  ///< paths, oldest first
+  std::deque<std::string> files_;      ///< paths, oldest first
   std::optional<EventRecord> loaded_;  ///< files_.front() read
   std::uint64_t next_file_ = 1, lost_ = 0;
 };

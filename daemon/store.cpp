@@ -136,16 +136,16 @@ void check_path(const std::string& path, bool read_only) {
   if (!read_only && !fs::exists(dir, ec)) {
     fs::create_directories(dir, ec);
     if (ec)
-      throw std::runtime_error(fmt::format("{}: cannot create the directory {}: {}", path,
-                                           dir.string(), ec.message()));
+      throw std::runtime_error(
+          fmt::format("{}: cannot create the directory {}: {}", path, dir.string(), ec.message()));
   }
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
     throw std::runtime_error(
         fmt::format("{}: {} is not a directory: {}", path, dir.string(), std::strerror(ENOTDIR)));
   if (::access(dir.c_str(), read_only ? X_OK : (W_OK | X_OK)) != 0)
-    throw std::runtime_error(
-        fmt::format("{}: cannot {} in {}: {}", path, read_only ? "read" : "write", dir.string(),
-                    std::strerror(errno)));
+    throw std::runtime_error(fmt::format("{}: cannot {} in {}: {}", path,
+                                         read_only ? "read" : "write", dir.string(),
+                                         std::strerror(errno)));
   if (fs::is_directory(p, ec))
     throw std::runtime_error(fmt::format("{}: is a directory, not an event store", path));
   if (fs::exists(p, ec) && ::access(p.c_str(), read_only ? R_OK : (R_OK | W_OK)) != 0)

@@ -67,7 +67,8 @@ class Cursor {
     if (i_ < s_.size() && s_[i_] == '+') ++i_;  // from_chars takes no leading '+'
     double v = 0;
     const auto r = std::from_chars(s_.data() + i_, s_.data() + s_.size(), v);
-    if (r.ec != std::errc() || !std::isfinite(v)) fail(fmt::format("expected {} (a finite number)", what));
+    if (r.ec != std::errc() || !std::isfinite(v))
+      fail(fmt::format("expected {} (a finite number)", what));
     i_ = static_cast<std::size_t>(r.ptr - s_.data());
     return v;
   }
@@ -111,7 +112,8 @@ SignalDef parse_sg(Cursor& c) {
   c.expect('|');
   s.length = static_cast<unsigned>(c.unsigned_in("the length", 1, 64));
   c.expect('@');
-  if (c.one_of("01", "byte order @0 or @1") != '1') c.fail("only Intel byte order (@1) is supported");
+  if (c.one_of("01", "byte order @0 or @1") != '1')
+    c.fail("only Intel byte order (@1) is supported");
   s.is_signed = c.one_of("+-", "'+' or '-'") == '-';
   c.expect('(');
   s.scale = c.number("the scale");

@@ -46,7 +46,7 @@ struct SampleStats {
   std::size_t frames = 0;
   std::size_t unknown_ids = 0;  ///< counted and ignored
   std::size_t samples = 0;
-  std::size_t counter_gaps = 0;  ///< lost frames detected by rolling counters
+  std::size_t counter_gaps = 0;     ///< lost frames detected by rolling counters
   std::size_t encoder_resyncs = 0;  ///< encoder edge clocks that restarted (EncoderSpeed::resyncs)
 };
 

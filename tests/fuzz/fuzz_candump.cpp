@@ -22,7 +22,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const auto again = can::parse_candump_line(can::format_candump_line(f));
     if (!again || again->t_us != f.t_us || again->frame.id != f.frame.id ||
         again->frame.len != f.frame.len)
-      std::abort();  // format and parse disagree
+      std::abort();              // format and parse disagree
     if (++n <= 1500) p.feed(f);  // bounded work per input
   }
   p.finish();

@@ -131,7 +131,6 @@ TEST(Registers, Float32IsPackedAbcdByOurOwnCode) {
   EXPECT_EQ(u[1], 0x5678);
 }
 
-
 TEST(Store, CommitsEventsWithSamplesAndReadsThemBack) {
   TempDir tmp;
   StoreConfig c;

@@ -56,9 +56,8 @@ TEST(Admission, OneAddressIsCappedAndANewAddressAlwaysGetsASlot) {
   a = admit_connection(conns({{"10.0.0.1", 1}, {"10.0.0.1", 2}}), "10.0.0.1", 4, 2);
   EXPECT_FALSE(a.admit);
   // Full: the idlest connection of the busiest address makes room for the newcomer.
-  a = admit_connection(
-      conns({{"10.0.0.1", 5}, {"10.0.0.1", 9}, {"10.0.0.1", 1}, {"10.0.0.2", 99}}), "10.0.0.3", 4,
-      3);
+  a = admit_connection(conns({{"10.0.0.1", 5}, {"10.0.0.1", 9}, {"10.0.0.1", 1}, {"10.0.0.2", 99}}),
+                       "10.0.0.3", 4, 3);
   ASSERT_TRUE(a.admit);
   ASSERT_TRUE(a.evict);
   EXPECT_EQ(*a.evict, 1u);  // 10.0.0.1 idle 9 s, not 10.0.0.2's (it holds only one)
@@ -130,8 +129,7 @@ TEST(ModbusServer, OneAddressIsLimitedAndTheRejectionsAreInARegister) {
 TEST(Store, ASystemReasonIsNamedNotJustUnableToOpen) {
   TempDir tmp;
   std::ofstream(tmp.p / "file") << "x";
-  for (const auto& [path, reason] :
-       std::vector<std::pair<std::string, std::string>>{
+  for (const auto& [path, reason] : std::vector<std::pair<std::string, std::string>>{
            {(tmp.p / "file" / "events.db").string(), "Not a directory"},
            {(tmp.p / "file" / "sub" / "events.db").string(), "Not a directory"},
            {tmp.p.string(), "is a directory"}}) {
@@ -201,18 +199,19 @@ TEST(Store, AStoreMadeBeforeTheUidColumnGetsIt) {
   const std::string path = (tmp.p / "old.db").string();
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db,
-                         "CREATE TABLE events (id INTEGER PRIMARY KEY AUTOINCREMENT, created_unix_s "
-                         "INTEGER NOT NULL, source TEXT NOT NULL, vehicle_id TEXT NOT NULL, "
-                         "pipeline_event_id INTEGER NOT NULL, bench TEXT NOT NULL, t_start_ns "
-                         "INTEGER NOT NULL, t_end_ns INTEGER NOT NULL, end_reason TEXT NOT NULL, "
-                         "flags TEXT NOT NULL, points INTEGER NOT NULL, model_hash TEXT NOT NULL, "
-                         "samples_stored INTEGER NOT NULL, calibration_toml TEXT NOT NULL, "
-                         "result_json TEXT NOT NULL);"
-                         "INSERT INTO events VALUES (1, 1, 's', '', 1, 'roller', 0, 1, 'x', '', 0, "
-                         "'', 0, '', '{}');",
-                         nullptr, nullptr, nullptr),
-            SQLITE_OK);
+  ASSERT_EQ(
+      sqlite3_exec(db,
+                   "CREATE TABLE events (id INTEGER PRIMARY KEY AUTOINCREMENT, created_unix_s "
+                   "INTEGER NOT NULL, source TEXT NOT NULL, vehicle_id TEXT NOT NULL, "
+                   "pipeline_event_id INTEGER NOT NULL, bench TEXT NOT NULL, t_start_ns "
+                   "INTEGER NOT NULL, t_end_ns INTEGER NOT NULL, end_reason TEXT NOT NULL, "
+                   "flags TEXT NOT NULL, points INTEGER NOT NULL, model_hash TEXT NOT NULL, "
+                   "samples_stored INTEGER NOT NULL, calibration_toml TEXT NOT NULL, "
+                   "result_json TEXT NOT NULL);"
+                   "INSERT INTO events VALUES (1, 1, 's', '', 1, 'roller', 0, 1, 'x', '', 0, "
+                   "'', 0, '', '{}');",
+                   nullptr, nullptr, nullptr),
+      SQLITE_OK);
   sqlite3_close(db);
   StoreConfig c;
   c.path = path;
@@ -268,7 +267,8 @@ TEST(Pending, SpillsInOrderAndARestartFindsThemOldestFirst) {
   EXPECT_EQ(again.adopt_spilled(), 3u);
   ASSERT_TRUE(again.front());
   EXPECT_EQ(again.front()->pipeline_event_id, 2);
-  EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(dir) / "00000000000000000000.cbor.bad"));
+  EXPECT_TRUE(
+      std::filesystem::exists(std::filesystem::path(dir) / "00000000000000000000.cbor.bad"));
   again.pop();
   EXPECT_EQ(again.front()->pipeline_event_id, 3);
   again.pop();
@@ -299,7 +299,8 @@ TEST(EventBlock, IsBuiltFromTheStoredDocumentAndSeqFollowsTheRowId) {
   EXPECT_EQ(w.input.back().first, reg("event.seq").address);
   EXPECT_EQ(regs[reg("event.seq").address], 70000 & 0xFFFF);
   EXPECT_EQ(regs[reg("event.id").address + 1], 70000 & 0xFFFF);
-  EXPECT_EQ(regs[reg("event.flags").address], kFlagAborted | kFlagNotFitted | kFlagSamplesNotStored);
+  EXPECT_EQ(regs[reg("event.flags").address],
+            kFlagAborted | kFlagNotFitted | kFlagSamplesNotStored);
   EXPECT_EQ(regs[reg("event.points").address], 100);
   const auto pf = reg("event.peak_force_n").address;
   EXPECT_FLOAT_EQ(unpack_f32_abcd(regs[pf], regs[pf + 1]), static_cast<float>(66.7 * 0.05 * 99));
@@ -329,13 +330,13 @@ TEST(ModbusGate, CutsRequestsAndAnswersWhatLibmodbusWouldSleepOn) {
   lying[5] = 255;
   EXPECT_EQ(gate(lying).result, GateResult::Drop);
   for (const auto& [pdu, exc] : std::vector<std::pair<std::vector<std::uint8_t>, int>>{
-           {{4, 0, 0, 0, 0}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},     // 0 registers
-           {{3, 0, 0, 0, 126}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},   // 126 registers
-           {{1, 0, 0, 0x07, 0xD1}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},  // 2001 coils
-           {{5, 0, 0, 0x12, 0x34}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},  // coil value
+           {{4, 0, 0, 0, 0}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},               // 0 registers
+           {{3, 0, 0, 0, 126}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},             // 126 registers
+           {{1, 0, 0, 0x07, 0xD1}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},         // 2001 coils
+           {{5, 0, 0, 0x12, 0x34}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},         // coil value
            {{16, 0, 0, 0, 2, 3, 1, 2, 3}, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},  // byte count
-           {{0x2B, 0x0E, 1, 0}, MODBUS_EXCEPTION_ILLEGAL_FUNCTION},  // unknown function
-           {{6, 0, 0, 0, 1}, MODBUS_EXCEPTION_ILLEGAL_FUNCTION},     // write, not allowed
+           {{0x2B, 0x0E, 1, 0}, MODBUS_EXCEPTION_ILLEGAL_FUNCTION},              // unknown function
+           {{6, 0, 0, 0, 1}, MODBUS_EXCEPTION_ILLEGAL_FUNCTION},  // write, not allowed
        }) {
     const auto g = gate(req(pdu));
     EXPECT_EQ(g.result, GateResult::Exception) << int(pdu[0]);
