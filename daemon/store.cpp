@@ -48,17 +48,6 @@ CREATE TABLE IF NOT EXISTS samples (
 CREATE INDEX IF NOT EXISTS events_created ON events(created_unix_s);
 )sql";
 
-/// Stores made before the uid column get it (NULL for their rows).
-bool has_uid_column(sqlite3* db) {
-  sqlite3_stmt* s = nullptr;
-  bool found = false;
-  if (sqlite3_prepare_v2(db, "PRAGMA table_info(events)", -1, &s, nullptr) == SQLITE_OK)
-    while (sqlite3_step(s) == SQLITE_ROW)
-      found |= std::strcmp(reinterpret_cast<const char*>(sqlite3_column_text(s, 1)), "uid") == 0;
-  sqlite3_finalize(s);
-  return found;
-}
-
 constexpr std::size_t kRecord = 8 + 4 * 8 + 2;
 
 struct Stmt {
@@ -79,6 +68,14 @@ struct Stmt {
     return p ? reinterpret_cast<const char*>(p) : "";
   }
 };
+
+/// Stores made before the uid column get it (NULL for their rows).
+bool has_uid_column(sqlite3* db) {
+  Stmt st(db, "PRAGMA table_info(events)");
+  while (sqlite3_step(st.s) == SQLITE_ROW)
+    if (st.col_text(1) == "uid") return true;
+  return false;
+}
 
 void exec(sqlite3* db, const char* sql) {
   char* err = nullptr;

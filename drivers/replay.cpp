@@ -20,7 +20,6 @@ ReplaySource::ReplaySource(const std::string& path, double speed, bool loop)
 std::optional<can::LoggedFrame> ReplaySource::next(int timeout_ms) {
   if (pos_ >= frames_.size() && loop_ && !frames_.empty()) {
     pos_ = 0;
-    ++loops_;
     shift_us_ += frames_.back().t_us - frames_.front().t_us + 1'000'000;
   }
   if (pos_ >= frames_.size()) {

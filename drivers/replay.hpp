@@ -22,7 +22,6 @@ class ReplaySource final : public FrameSource {
   ReplaySource(const std::string& path, double speed, bool loop = false);
   std::optional<can::LoggedFrame> next(int timeout_ms) override;
   bool finished() const override { return !loop_ && pos_ >= frames_.size(); }
-  std::uint64_t loops() const { return loops_; }
   static constexpr std::chrono::milliseconds kCoalesce{1};
   std::string describe() const override { return "replay " + path_; }
 
@@ -32,7 +31,6 @@ class ReplaySource final : public FrameSource {
   bool loop_;
   std::vector<can::LoggedFrame> frames_;
   std::size_t pos_ = 0;
-  std::uint64_t loops_ = 0;
   std::int64_t shift_us_ = 0;  ///< added to every stamp of the current pass
   std::chrono::steady_clock::time_point t0_;
 };
