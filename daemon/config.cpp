@@ -54,13 +54,26 @@ void parse_source(const TomlReader& rd, const toml::table& t, Config& c) {
 
 void parse_gpio(const TomlReader& rd, const toml::table& t, Config& c) {
   const std::string p = "gpio.";
-  rd.check_keys(t, p, {"chip", "ref_a", "ref_b", "wheel_a", "wheel_b", "frame_period_ms"});
+  rd.check_keys(t, p,
+                {"chip", "ref_a", "ref_b", "wheel_a", "wheel_b", "frame_period_ms", "uapi",
+                 "event_buffer_size", "reader_rt_priority"});
   c.gpio.chip = rd.string(t, p, "chip", c.gpio.chip);
   const char* keys[4] = {"ref_a", "ref_b", "wheel_a", "wheel_b"};
   for (std::size_t i = 0; i < 4; ++i)
     c.gpio.offsets[i] =
         static_cast<unsigned>(rd.integer(t, p, keys[i], c.gpio.offsets[i], 0, 1023));
   c.gpio.frame_period_ms = static_cast<int>(rd.integer(t, p, "frame_period_ms", 1, 1, 100));
+  const std::string uapi = rd.string(t, p, "uapi", "v2");
+  if (uapi != "v1" && uapi != "v2")
+    rd.fail(p + "uapi",
+            "expected 'v2' (kernel GPIO uAPI v2: large FIFO, lost edges counted) or "
+            "'v1' (libgpiod 1.6: 16 events per line, losses only seen as illegal "
+            "transitions)");
+  c.gpio.uapi = uapi == "v1" ? drivers::GpioConfig::Uapi::V1 : drivers::GpioConfig::Uapi::V2;
+  c.gpio.event_buffer_size =
+      static_cast<int>(rd.integer(t, p, "event_buffer_size", c.gpio.event_buffer_size, 16, 1024));
+  c.gpio.reader_rt_priority =
+      static_cast<int>(rd.integer(t, p, "reader_rt_priority", c.gpio.reader_rt_priority, 0, 99));
 }
 
 void parse_rtu(const TomlReader& rd, const toml::table& t, Config& c) {

@@ -90,7 +90,7 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
         break;
       case SourceKind::Gpio:
         source_ = std::make_unique<drivers::LocalLiveSource>(cfg_.gpio, cfg_.rtu,
-                                                             drivers::open_gpiod_edge_source);
+                                                             drivers::open_edge_source);
         break;
     }
   } catch (const InputError& e) {
@@ -177,6 +177,8 @@ void Daemon::post_status(Clock::time_point now) {
   w.u32("unknown_ids", static_cast<std::uint32_t>(st.unknown_ids));
   w.u32("encoder_resyncs", static_cast<std::uint32_t>(st.encoder_resyncs));
   w.u32("queue_drops", static_cast<std::uint32_t>(c.queue_drops.load()));
+  w.u32("lost_edges", static_cast<std::uint32_t>(c.lost_edges.load()));
+  w.u32("can_rx_dropped", static_cast<std::uint32_t>(c.can_rx_dropped.load()));
   w.u16("events_waiting",
         static_cast<std::uint16_t>(std::min<std::size_t>(pending_->size(), 65535)));
   w.u16("events_spilled",

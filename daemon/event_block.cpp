@@ -41,6 +41,7 @@ RegisterWrites event_block(const std::string& result_json, std::int64_t id, bool
     if (f == "too_short") flags |= kFlagTooShort;
     if (f == "aborted") flags |= kFlagAborted;
     if (f == "sensor_fault") flags |= kFlagSensorFault;
+    if (f == "edges_lost") flags |= kFlagEdgesLost;
   }
   const auto& results = doc.at("results");
   if (results.empty()) flags |= kFlagNotFitted;

@@ -16,7 +16,7 @@ std::vector<RegisterDef> build_map() {
   using T = RegTable;
   using Y = RegType;
   std::vector<RegisterDef> m = {
-      {"map_version", T::Input, 0, 1, Y::U16, "", "register map version (2)"},
+      {"map_version", T::Input, 0, 1, Y::U16, "", "register map version (3)"},
       {"status_flags", T::Input, 1, 1, Y::U16, "bits",
        "0 running, 1 source finished, 2 ref encoder missing, 3 wheel encoder missing, 4 pressure "
        "missing, 5 event active, 6 store degraded (samples not stored), 7 store error (the last "
@@ -28,7 +28,7 @@ std::vector<RegisterDef> build_map() {
       {"events_flagged", T::Input, 8, 2, Y::U32, "",
        "finished events flagged (aborted, short, fault)"},
       {"illegal_transitions", T::Input, 10, 2, Y::U32, "",
-       "illegal quadrature transitions (dropped GPIO edges)"},
+       "illegal quadrature transitions (a sign of dropped GPIO edges)"},
       {"rtu_timeouts", T::Input, 12, 2, Y::U32, "", "Modbus RTU pressure read timeouts"},
       {"rtu_reconnects", T::Input, 14, 2, Y::U32, "", "Modbus RTU reconnects"},
       {"counter_gaps", T::Input, 16, 2, Y::U32, "", "lost frames detected by rolling counters"},
@@ -55,12 +55,17 @@ std::vector<RegisterDef> build_map() {
       {"slip_ratio", T::Input, 44, 2, Y::F32, "1", "slip = 1 - v_wheel / v_ref (Eq. 1)"},
       {"pressure_bar", T::Input, 46, 2, Y::F32, "bar", "brake-line pressure"},
       {"force_n", T::Input, 48, 2, Y::F32, "N", "tester force reading (NaN when absent)"},
+      {"lost_edges", T::Input, 50, 2, Y::U32, "",
+       "GPIO edges the kernel dropped (v2 uAPI sequence-number gaps; the v1 uAPI cannot tell)"},
+      {"can_rx_dropped", T::Input, 52, 2, Y::U32, "",
+       "CAN frames the kernel dropped because the socket's receive queue was full (SO_RXQ_OVFL)"},
       {"event.seq_begin", T::Input, 100, 1, Y::U16, "",
        "event sequence, written first (equal to event.seq when the block is consistent)"},
       {"event.id", T::Input, 101, 2, Y::U32, "", "event id (row id in the event store)"},
       {"event.bench", T::Input, 103, 1, Y::U16, "", "0 roller, 1 ground"},
       {"event.flags", T::Input, 104, 1, Y::U16, "bits",
-       "0 too short, 1 aborted, 2 sensor fault, 3 not fitted, 4 samples not stored"},
+       "0 too short, 1 aborted, 2 sensor fault, 3 not fitted, 4 samples not stored, 5 edges lost "
+       "(GPIO edges dropped or illegal transitions during the event; still fitted)"},
       {"event.end_reason", T::Input, 105, 1, Y::U16, "",
        "1 switch_off_slip, 2 wheel_lock, 3 release, 4 stopped, 5 sensor_timeout, 6 end_of_data, 7 "
        "tester_aborted, 8 operator_abort, 9 shutdown, 0 other"},

@@ -24,7 +24,7 @@ struct RegisterDef {
   const char* description;
 };
 
-inline constexpr std::uint16_t kMapVersion = 2;
+inline constexpr std::uint16_t kMapVersion = 3;
 inline constexpr std::uint16_t kInputRegisters = 200;
 inline constexpr std::uint16_t kHoldingRegisters = 16;
 
@@ -49,6 +49,7 @@ enum EventFlagBit : std::uint16_t {
   kFlagSensorFault = 1u << 2,
   kFlagNotFitted = 1u << 3,
   kFlagSamplesNotStored = 1u << 4,
+  kFlagEdgesLost = 1u << 5,  ///< the GPIO reader lost edges during the event (still fitted)
 };
 /// End reasons (input register "event.end_reason").
 std::uint16_t end_reason_code(const std::string& reason);

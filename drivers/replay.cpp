@@ -56,7 +56,9 @@ LocalLiveSource::LocalLiveSource(
 }
 
 std::string LocalLiveSource::describe() const {
-  return fmt::format("gpio {} + modbus-rtu {}", gcfg_.chip, rcfg_.device);
+  return fmt::format("gpio {} ({} uAPI, {}) + modbus-rtu {}", gcfg_.chip,
+                     gcfg_.uapi == GpioConfig::Uapi::V2 ? "v2" : "v1", gpio_->scheduling(),
+                     rcfg_.device);
 }
 
 CandumpRecorder::CandumpRecorder(std::string dir, std::uint64_t max_bytes, double max_age_s,

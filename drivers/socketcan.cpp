@@ -75,6 +75,11 @@ CanSocket CanSocket::open(const std::string& iface, const std::vector<std::uint3
 CanSocket::CanSocket(int fd, std::string iface) : fd_(fd), iface_(std::move(iface)) {
   const int on = 1;
   ::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof on);
+  // The kernel's count of frames dropped on a full receive queue rides on every frame.
+  ::setsockopt(fd_, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on);
+  // A larger receive queue (up to net.core.rmem_max) rides out bursts while the pipeline fits.
+  const int rcvbuf = 4 << 20;
+  ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
 }
 
 CanSocket::CanSocket(CanSocket&& o) noexcept : fd_(o.fd_), iface_(std::move(o.iface_)) {
@@ -89,7 +94,7 @@ std::optional<can::LoggedFrame> CanSocket::read(int timeout_ms, DriverCounters* 
   pollfd p{fd_, POLLIN, 0};
   if (::poll(&p, 1, timeout_ms) <= 0 || !(p.revents & POLLIN)) return std::nullopt;
   alignas(canfd_frame) std::uint8_t buf[sizeof(canfd_frame)];
-  alignas(cmsghdr) char ctrl[CMSG_SPACE(sizeof(timeval))];
+  alignas(cmsghdr) char ctrl[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(std::uint32_t))];
   iovec iov{buf, sizeof buf};
   msghdr msg{};
   msg.msg_iov = &iov;
@@ -114,14 +119,29 @@ std::optional<can::LoggedFrame> CanSocket::read(int timeout_ms, DriverCounters* 
       timeval tv{};
       std::memcpy(&tv, CMSG_DATA(c), sizeof tv);
       lf.t_us = static_cast<std::int64_t>(tv.tv_sec) * 1'000'000 + tv.tv_usec;
+    } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL && counters) {
+      std::uint32_t dropped = 0;  // the socket's total since it opened
+      std::memcpy(&dropped, CMSG_DATA(c), sizeof dropped);
+      counters->can_rx_dropped = dropped;
     }
   }
   if (counters) ++counters->frames;
   return lf;
 }
 
-std::optional<can::LoggedFrame> SocketCanSource::next(int timeout_ms) {
-  return sock_.read(timeout_ms, &counters_);
+SocketCanSource::SocketCanSource(CanSocket s, std::string iface)
+    : sock_(std::move(s)), iface_(std::move(iface)) {
+  th_ = std::thread([this] {
+    while (!stop_) {
+      auto f = sock_.read(100, &counters_);
+      if (f && !q_.push(std::move(*f))) ++counters_.queue_drops;
+    }
+  });
+}
+
+SocketCanSource::~SocketCanSource() {
+  stop_ = true;
+  if (th_.joinable()) th_.join();
 }
 
 }  // namespace brakefit::drivers

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "drivers/source.hpp"
@@ -38,16 +39,24 @@ class CanSocket {
   std::string iface_;
 };
 
+/// A reader thread drains the socket into a FrameQueue, so the kernel's receive queue (a few
+/// hundred frames at the default net.core.rmem_max) is emptied while the pipeline fits an event;
+/// what the kernel still drops is counted (SO_RXQ_OVFL -> can_rx_dropped).
 class SocketCanSource final : public FrameSource {
  public:
-  explicit SocketCanSource(CanSocket s, std::string iface)
-      : sock_(std::move(s)), iface_(std::move(iface)) {}
-  std::optional<can::LoggedFrame> next(int timeout_ms) override;
+  SocketCanSource(CanSocket s, std::string iface);
+  ~SocketCanSource() override;
+  SocketCanSource(const SocketCanSource&) = delete;
+  SocketCanSource& operator=(const SocketCanSource&) = delete;
+  std::optional<can::LoggedFrame> next(int timeout_ms) override { return q_.pop(timeout_ms); }
   std::string describe() const override { return "socketcan " + iface_; }
 
  private:
   CanSocket sock_;
   std::string iface_;
+  FrameQueue q_;
+  std::atomic<bool> stop_{false};
+  std::thread th_;
 };
 
 }  // namespace brakefit::drivers

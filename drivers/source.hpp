@@ -26,6 +26,8 @@ struct DriverCounters {
   std::atomic<std::uint64_t> frames{0};
   std::atomic<std::uint64_t> queue_drops{0};
   std::atomic<std::uint64_t> illegal_transitions{0};
+  std::atomic<std::uint64_t> lost_edges{0};      ///< v2 uAPI sequence-number gaps
+  std::atomic<std::uint64_t> can_rx_dropped{0};  ///< SO_RXQ_OVFL: frames the kernel dropped
   std::atomic<std::uint64_t> rtu_reads{0};
   std::atomic<std::uint64_t> rtu_timeouts{0};
   std::atomic<std::uint64_t> rtu_errors{0};

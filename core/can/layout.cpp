@@ -47,6 +47,12 @@ const std::vector<MessageDef>& layout() {
         {"counter", 16, 8, false, 1, 0, 0, 255, ""},
         {"set_speed_kmh", 24, 16, false, 0.01, 0, 0, 655.35, "km/h"},
         {"wheel", 40, 8, false, 1, 0, 0, 3, ""}}},
+      {kIdEncoderFaults,
+       "ENCODER_FAULTS",
+       8,
+       {{"lost_edges", 0, 24, false, 1, 0, 0, 16777215, "count"},
+        {"illegal_transitions", 24, 24, false, 1, 0, 0, 16777215, "count"},
+        {"counter", 48, 8, false, 1, 0, 0, 255, ""}}},
   };
   return kLayout;
 }
@@ -103,6 +109,14 @@ std::optional<BenchMsg> decode(const Frame& f) {
       s.wheel = static_cast<std::uint8_t>(u(m, "wheel"));
       return s;
     }
+    case kIdEncoderFaults: {
+      const MessageDef& m = message(f.id);
+      EncoderFaultsMsg e;
+      e.lost_edges_mod = u(m, "lost_edges");
+      e.illegal_transitions_mod = u(m, "illegal_transitions");
+      e.counter = static_cast<std::uint8_t>(u(m, "counter"));
+      return e;
+    }
     default:
       return std::nullopt;
   }
@@ -135,6 +149,12 @@ Frame encode(const BenchMsg& msg) {
           encode_signal(f, d.signal("brake_force_n"), m.brake_force_n);
           encode_signal(f, d.signal("counter"), m.counter);
           encode_signal(f, d.signal("sample_time_us"), m.sample_time_us);
+        } else if constexpr (std::is_same_v<T, EncoderFaultsMsg>) {
+          f.id = kIdEncoderFaults;
+          const MessageDef& d = message(f.id);
+          encode_signal(f, d.signal("lost_edges"), m.lost_edges_mod & 0xFFFFFFu);
+          encode_signal(f, d.signal("illegal_transitions"), m.illegal_transitions_mod & 0xFFFFFFu);
+          encode_signal(f, d.signal("counter"), m.counter);
         } else {
           f.id = kIdTestState;
           const MessageDef& d = message(f.id);

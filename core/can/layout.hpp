@@ -14,6 +14,7 @@ namespace brakefit::can {
 inline constexpr std::uint32_t kIdRollerEncoder = 0x100;
 inline constexpr std::uint32_t kIdWheelEncoder = 0x101;
 inline constexpr std::uint32_t kIdFifthWheelEncoder = 0x102;
+inline constexpr std::uint32_t kIdEncoderFaults = 0x103;
 inline constexpr std::uint32_t kIdBrakePressure = 0x110;
 inline constexpr std::uint32_t kIdTesterForce = 0x120;
 inline constexpr std::uint32_t kIdTestState = 0x130;
@@ -57,7 +58,16 @@ struct TestStateMsg {
   double set_speed_kmh = 0.0;
   std::uint8_t wheel = 1;  ///< 0 FL, 1 FR, 2 RL, 3 RR
 };
-using BenchMsg = std::variant<EncoderMsg, PressureMsg, TesterForceMsg, TestStateMsg>;
+/// What a GPIO reader knows it lost: edges the kernel dropped (v2 uAPI sequence-number gaps) and
+/// illegal quadrature transitions, both cumulative modulo 2^24. Sent when either changes (and once
+/// at start); an event during which they grow is flagged edges_lost.
+struct EncoderFaultsMsg {
+  std::uint32_t lost_edges_mod = 0;
+  std::uint32_t illegal_transitions_mod = 0;
+  std::uint8_t counter = 0;
+};
+using BenchMsg =
+    std::variant<EncoderMsg, PressureMsg, TesterForceMsg, TestStateMsg, EncoderFaultsMsg>;
 
 /// std::nullopt for an id that is not in the layout (or a remote/error frame).
 std::optional<BenchMsg> decode(const Frame& f);

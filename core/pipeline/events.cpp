@@ -35,6 +35,7 @@ std::optional<Event> EventDetector::feed(const Sample& s) {
       cur_->event_id = next_id_++;
       cur_->bench = cal_.bench;
       cur_->t_start_ns = s.t_ns;
+      cur_->encoder_faults_at_start = s.encoder_faults;
     } else {
       return done;
     }
@@ -43,6 +44,9 @@ std::optional<Event> EventDetector::feed(const Sample& s) {
   if (s.sensor_fault &&
       std::find(cur_->flags.begin(), cur_->flags.end(), "sensor_fault") == cur_->flags.end())
     cur_->flags.push_back("sensor_fault");
+  if (s.encoder_faults > cur_->encoder_faults_at_start &&
+      std::find(cur_->flags.begin(), cur_->flags.end(), "edges_lost") == cur_->flags.end())
+    cur_->flags.push_back("edges_lost");
   // The end decisions on the slip filtered over end_filter_s (the mean of those samples).
   recent_slip_.emplace_back(s.t_ns, slip_ratio(s));
   const auto window_ns = static_cast<std::int64_t>(set_.end_filter_s * 1e9);

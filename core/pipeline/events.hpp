@@ -40,9 +40,16 @@ struct Event {
   std::string
       end_reason;  ///< switch_off_slip, wheel_lock, release, stopped, sensor_timeout,
                    ///< end_of_data (aborted), end_of_file (an event file's last row: finished)
-  std::vector<std::string> flags;  ///< too_short, aborted, sensor_fault
+  /// too_short, aborted, sensor_fault; edges_lost (the GPIO reader lost edges during the event:
+  /// still fitted, the speeds around the loss are suspect)
+  std::vector<std::string> flags;
   std::vector<Sample> samples;
-  bool fittable() const { return flags.empty(); }
+  std::uint64_t encoder_faults_at_start = 0;
+  bool fittable() const {
+    for (const auto& f : flags)
+      if (f != "edges_lost") return false;
+    return true;
+  }
 };
 
 inline double slip_ratio(const Sample& s) {

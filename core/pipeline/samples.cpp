@@ -99,6 +99,19 @@ std::optional<Sample> SampleBuilder::feed(const can::LoggedFrame& f) {
     cur_.force_n = fm->brake_force_n;
   } else if (const auto* s = std::get_if<can::TestStateMsg>(&*msg)) {
     cur_.state = s->state;
+  } else if (const auto* ef = std::get_if<can::EncoderFaultsMsg>(&*msg)) {
+    // Cumulative modulo 2^24 at the sender: the growth since the last report counts. The first
+    // report only sets the reference (a recording may start long after the reader did).
+    if (last_faults_) {
+      const auto grow = [](std::uint32_t now, std::uint32_t before) {
+        return static_cast<std::size_t>((now - before) & 0xFFFFFFu);
+      };
+      stats_.encoder_faults +=
+          grow(ef->lost_edges_mod, last_faults_->lost_edges_mod) +
+          grow(ef->illegal_transitions_mod, last_faults_->illegal_transitions_mod);
+    }
+    last_faults_ = *ef;
+    cur_.encoder_faults = stats_.encoder_faults;
   }
   return out;
 }

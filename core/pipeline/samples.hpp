@@ -20,6 +20,9 @@ struct Sample {
   double force_n = NAN;  ///< the tester's own force reading, NaN when absent
   can::TestState state = can::TestState::Idle;
   bool sensor_fault = false;
+  /// Edges the GPIO reader lost or saw in an illegal order since the stream began (from the
+  /// ENCODER_FAULTS frames); an event during which it grows is flagged edges_lost.
+  std::uint64_t encoder_faults = 0;
 };
 
 /// Speed from a quadrature encoder's x4 count (mod 2^24) and last-edge time (mod 2^32 us).
@@ -48,6 +51,7 @@ struct SampleStats {
   std::size_t samples = 0;
   std::size_t counter_gaps = 0;     ///< lost frames detected by rolling counters
   std::size_t encoder_resyncs = 0;  ///< encoder edge clocks that restarted (EncoderSpeed::resyncs)
+  std::size_t encoder_faults = 0;   ///< lost edges + illegal transitions the GPIO reader reported
 };
 
 /// A sample is emitted once its time group is complete: at the next wheel-encoder frame or at the
@@ -71,6 +75,7 @@ class SampleBuilder {
   std::int64_t pending_t_ns_ = 0;
   std::int64_t last_t_ns_ = INT64_MIN;
   int last_wheel_counter_ = -1;
+  std::optional<can::EncoderFaultsMsg> last_faults_;
   SampleStats stats_;
 };
 

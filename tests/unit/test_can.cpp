@@ -65,6 +65,11 @@ TEST(Codec, RoundTripsEveryMessageAtItsResolution) {
   EXPECT_EQ(ds.state, TestState::SwitchedOff);
   EXPECT_EQ(ds.bench, BenchKind::Ground);
   EXPECT_NEAR(ds.set_speed_kmh, 40.0, 1e-9);
+  EncoderFaultsMsg ef{0x1000005, 17, 3};  // totals wrap modulo 2^24
+  const auto def = std::get<EncoderFaultsMsg>(*decode(encode(ef)));
+  EXPECT_EQ(def.lost_edges_mod, 5u);
+  EXPECT_EQ(def.illegal_transitions_mod, 17u);
+  EXPECT_EQ(def.counter, 3);
   // Out-of-range values clamp to the signal's range instead of wrapping.
   PressureMsg big{1e6, 0, 0, 0};
   EXPECT_NEAR(std::get<PressureMsg>(*decode(encode(big))).pressure_bar, 655.35, 1e-9);

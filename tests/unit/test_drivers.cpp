@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "core/can/layout.hpp"
+#include "core/pipeline/events.hpp"
 #include "core/pipeline/samples.hpp"
 #include "drivers/candump_file.hpp"
 #include "drivers/gpio.hpp"
@@ -186,7 +187,16 @@ TEST(GpioPath, ReaderThreadBlocksInTheSourceAndCountsDroppedEdges) {
   EXPECT_GT(waits, 10);
   EXPECT_GE(counters.frames.load(), 2u * 20u);
   std::optional<can::LoggedFrame> last_ref, last_wheel;
-  while (auto f = q.pop(0)) (f->frame.id == can::kIdWheelEncoder ? last_wheel : last_ref) = *f;
+  std::optional<can::EncoderFaultsMsg> faults;
+  while (auto f = q.pop(0)) {
+    if (f->frame.id == can::kIdEncoderFaults)
+      faults = std::get<can::EncoderFaultsMsg>(*can::decode(f->frame));
+    else
+      (f->frame.id == can::kIdWheelEncoder ? last_wheel : last_ref) = *f;
+  }
+  // The loss rides in the stream too (recorded, replayed): an ENCODER_FAULTS frame with it.
+  ASSERT_TRUE(faults);
+  EXPECT_GE(faults->illegal_transitions_mod, 1u);
   ASSERT_TRUE(last_ref && last_wheel);
   const auto r = std::get<can::EncoderMsg>(*can::decode(last_ref->frame));
   const auto w = std::get<can::EncoderMsg>(*can::decode(last_wheel->frame));
@@ -415,12 +425,48 @@ TEST(ModbusRtu, AbsentSerialPortIsNamed) {
 TEST(Gpio, AbsentChipIsNamed) {
   GpioConfig g;
   g.chip = "gpiochip99";
-  try {
-    open_gpiod_edge_source(g);
-    FAIL();
-  } catch (const SourceError& e) {
-    EXPECT_NE(std::string(e.what()).find("gpiochip99"), std::string::npos);
+  for (auto uapi : {GpioConfig::Uapi::V1, GpioConfig::Uapi::V2}) {
+    g.uapi = uapi;
+    try {
+      open_edge_source(g);
+      FAIL();
+    } catch (const SourceError& e) {
+      EXPECT_NE(std::string(e.what()).find("gpiochip99"), std::string::npos);
+    }
   }
+}
+
+TEST(GpioPath, LostEdgesDuringAnEventFlagItAndItIsStillFitted) {
+  // The framer reports its totals when they change; the sample builder turns the growth into a
+  // running count; the detector flags the event during which it grew.
+  GpioConfig gc;
+  EncoderFramer framer(gc);
+  framer.seed({false, false, false, false});
+  auto first = framer.faults_frame(0, 0);
+  ASSERT_TRUE(first);                       // the first report always goes out
+  EXPECT_FALSE(framer.faults_frame(0, 1));  // nothing changed: nothing sent
+  auto grown = framer.faults_frame(7, 2);   // seven edges the kernel dropped
+  ASSERT_TRUE(grown);
+  pipeline::Calibration cal;
+  pipeline::SampleBuilder sb(cal);
+  sb.feed(*first);
+  sb.feed(*grown);
+  EXPECT_EQ(sb.stats().encoder_faults, 7u);
+  pipeline::EventSettings es;
+  pipeline::EventDetector det(cal, es);
+  std::optional<pipeline::Event> ev;
+  for (int i = 0; i < 200 && !ev; ++i) {
+    pipeline::Sample s;
+    s.t_ns = i * 1'000'000;
+    s.v_ref_mps = 1.39;
+    s.v_wheel_mps = 1.39 * (1 - 0.001 * i);
+    s.pressure_bar = i < 150 ? 5.0 : 0.0;
+    s.encoder_faults = i < 60 ? 0 : 7;  // lost in the middle of the event
+    ev = det.feed(s);
+  }
+  ASSERT_TRUE(ev);
+  EXPECT_NE(std::find(ev->flags.begin(), ev->flags.end(), "edges_lost"), ev->flags.end());
+  EXPECT_TRUE(ev->fittable());
 }
 
 TEST(Replay, FastReplayDeliversEveryFrameAndPacedReplayKeepsTime) {
