@@ -1,0 +1,270 @@
+"""Judges what the virtual bench's guest left in OUT: check.py ROOT BUILD OUT GPIO_SCALE.
+
+Prints the figures (frames replayed vs received, the published parameters against `brakefit
+replay`, edges driven vs counted per reader delay) and exits 1 on any failed expectation. Writes
+OUT/summary.json (brakefit.vbench/1).
+"""
+import json
+import os
+import re
+import struct
+import subprocess
+import sys
+
+ROOT, BUILD, OUT, SCALE = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
+BRAKEFIT = os.path.join(BUILD, "cli", "brakefit")
+REC = os.path.join(ROOT, "data", "recorded")
+METHODS = ["som", "mlp", "lm", "hybrid"]
+FIELDS = ["B", "C", "D", "E"]
+BENCH_IDS = {0x100, 0x101, 0x102, 0x103, 0x110, 0x120, 0x130}
+FOREIGN_IDS = {0x200, 0x7FF, 0x1ABCDEF0}
+# The GPIO path against `brakefit replay` of the played log: REPORTED, NOT ASSERTED (issue 11
+# stays open on it). The edges are counted exactly and the daemon's recording replays to exactly
+# the published event, but the slips the daemon measures from the kernel's edge times scatter
+# (0 to 20 % where the log has a smooth ramp), and the fits differ from the log's by 10-100 %.
+# Measured with time x6 at 1 ms and 6 ms frame periods, with and without -icount; the cause is
+# not yet found (player lateness explains only part: 35-200 edges > 0.5 ms late of 36 712).
+GPIO_REPORTED_ONLY = True
+GPIO_ASSERTED = ["mlp", "lm", "hybrid"]
+
+failures = []
+summary = {"schema": "brakefit.vbench/1", "version": 1}
+
+
+def expect(ok, what):
+    print(("  ok    " if ok else "  FAIL  ") + what)
+    if not ok:
+        failures.append(what)
+
+
+def read_frames(path):
+    """(t_us, id, data hex) of a candump -L style file."""
+    out = []
+    if not os.path.exists(path):
+        return out
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for ln in f:
+            m = re.match(r"\((\d+)\.(\d{6})\) \S+ ([0-9A-Fa-f]+)#(\S*)", ln)
+            if m:
+                out.append((int(m.group(1)) * 1_000_000 + int(m.group(2)), int(m.group(3), 16),
+                            m.group(4).upper()))
+    return out
+
+
+def regs(path):
+    r = {}
+    if os.path.exists(path):
+        with open(path, encoding="utf-8") as f:
+            for ln in f:
+                m = re.match(r"\[(\d+)\]:\s*(-?\d+)", ln)
+                if m:
+                    r[int(m.group(1))] = int(m.group(2)) & 0xFFFF
+    return r
+
+
+def u32(r, a):
+    return (r.get(a, 0) << 16) | r.get(a + 1, 0)
+
+
+def f32(r, a):
+    return struct.unpack(">f", struct.pack(">I", u32(r, a)))[0]
+
+
+def published(r):
+    """The event block's parameters per method."""
+    out = {}
+    for k, m in enumerate(METHODS):
+        base = 120 + 12 * k
+        out[m] = {f: f32(r, base + 2 * i) for i, f in enumerate(FIELDS)}
+    return out
+
+
+def replay(log, bench):
+    p = subprocess.run([BRAKEFIT, "replay", "--json", "--bench", bench, log], capture_output=True,
+                       text=True, check=False)
+    docs = [json.loads(x) for x in p.stdout.splitlines() if x.startswith("{")]
+    return docs
+
+
+def params(doc):
+    return {r["method"]: {f: r[f] for f in FIELDS} for r in doc["results"]}
+
+
+def f32_equal(a, b):
+    return struct.pack(">f", a) == struct.pack(">f", b)
+
+
+def net_counts(frames):
+    """Net x4 count per encoder id over a frame list (modulo arithmetic of the layout)."""
+    last, net = {}, {}
+    for _, i, data in frames:
+        if i not in (0x100, 0x101, 0x102) or len(data) < 6:
+            continue
+        b = bytes.fromhex(data)
+        c = b[0] | b[1] << 8 | b[2] << 16
+        if i in last:
+            d = (c - last[i]) & 0xFFFFFF
+            net[i] = net.get(i, 0) + (d - 0x1000000 if d & 0x800000 else d)
+        last[i] = c
+    return net
+
+
+def link_tx(path):
+    if not os.path.exists(path):
+        return None
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    m = re.search(r"TX:\s+bytes\s+packets.*?\n\s*(\d+)\s+(\d+)", text)
+    return int(m.group(2)) if m else None
+
+
+def table(rows):
+    for r in rows:
+        print("    " + "  ".join(f"{c:>12}" for c in r))
+
+
+# ------------------------------------------------------------------ SocketCAN
+print("SocketCAN on vcan0 (canplayer -> brakefitd, candump -L alongside)")
+can_out = os.path.join(OUT, "can")
+inp = read_frames(os.path.join(can_out, "input.log"))
+dump = read_frames(os.path.join(can_out, "candump.log"))
+rec = read_frames(os.path.join(can_out, "recorded.log"))
+n_bench = sum(1 for f in inp if f[1] in BENCH_IDS)
+n_foreign = sum(1 for f in inp if f[1] in FOREIGN_IDS)
+d_bench = sum(1 for f in dump if f[1] in BENCH_IDS)
+d_foreign = sum(1 for f in dump if f[1] in FOREIGN_IDS)
+r0, r1 = regs(os.path.join(can_out, "regs_before.txt")), regs(os.path.join(can_out, "regs_event.txt"))
+daemon_frames = u32(r1, 4) - u32(r0, 4)
+print(f"    replayed {n_bench} bench + {n_foreign} foreign frames; candump saw {d_bench} + "
+      f"{d_foreign}; the daemon received {daemon_frames} (unknown ids {u32(r1, 18)})")
+expect(d_bench == n_bench and d_foreign == n_foreign, "candump saw every replayed frame")
+expect(daemon_frames == n_bench, "the daemon received exactly the bench frames (kernel filter "
+       f"dropped the {n_foreign} foreign ones)")
+expect(u32(r1, 18) == 0, "no unknown id reached the daemon")
+summary["can"] = {"replayed_bench": n_bench, "replayed_foreign": n_foreign,
+                  "candump_bench": d_bench, "candump_foreign": d_foreign,
+                  "daemon_frames": daemon_frames}
+# The daemon's recording against candump -L, up to candump's last frame.
+if dump:
+    t_last = dump[-1][0]
+    rec_cut = [f for f in rec if f[0] <= t_last]
+    dump_bench = [f for f in dump if f[1] in BENCH_IDS]
+    same_frames = [(i, d) for _, i, d in rec_cut] == [(i, d) for _, i, d in dump_bench]
+    same_stamps = [t for t, _, _ in rec_cut] == [t for t, _, _ in dump_bench]
+    expect(same_frames, f"the daemon's recording and candump -L have the same {len(rec_cut)} "
+           "frames (ids and data, in order)")
+    print(f"    time stamps identical: {same_stamps}")
+    summary["can"]["recording_equals_candump"] = same_frames
+    summary["can"]["stamps_equal"] = same_stamps
+can_log = "roller_1p0bar_fast"
+ref = replay(os.path.join(REC, can_log + ".log"), os.path.join(REC, can_log + ".bench.toml"))
+pub = published(r1)
+rows = [["method", "param", "published", "replay(log)", "rel diff"]]
+worst = 0.0
+if ref:
+    for m, ps in params(ref[0]).items():
+        for f in FIELDS:
+            a, b = pub[m][f], ps[f]
+            rel = abs(a - b) / max(abs(b), 1e-9)
+            worst = max(worst, rel)
+            rows.append([m, f, f"{a:.5g}", f"{b:.5g}", f"{rel:.2e}"])
+table(rows)
+# Frames are stamped on receipt (SO_TIMESTAMP), not with the log's times: samples are grouped by
+# those stamps, so an ill-conditioned fit (lm's E with C at its bound) moves by a few 1e-3.
+expect(bool(ref) and worst < 1e-2, f"published parameters equal brakefit replay of the shipped "
+       f"log within 1 % (worst relative difference {worst:.2e})")
+summary["can"]["params_worst_rel_diff_vs_replay"] = worst
+rec_docs = replay(os.path.join(can_out, "recorded.log"), os.path.join(REC, can_log + ".bench.toml"))
+exact = bool(rec_docs) and all(f32_equal(pub[m][f], v) for m, ps in params(rec_docs[0]).items()
+                               for f, v in ps.items())
+expect(exact, "replaying the daemon's recording gives the published parameters exactly (f32)")
+# The burst.
+tx0 = link_tx(os.path.join(can_out, "link_burst_before.txt"))
+tx1 = link_tx(os.path.join(can_out, "link_burst_after.txt"))
+b0, b1 = regs(os.path.join(can_out, "regs_burst_before.txt")), regs(os.path.join(can_out, "regs_burst_after.txt"))
+sent = (tx1 - tx0) if tx0 is not None and tx1 is not None else None
+got = u32(b1, 4) - u32(b0, 4)
+dropped = u32(b1, 52) - u32(b0, 52)
+print(f"    burst: {sent} frames sent back to back, daemon received {got}, kernel reported "
+      f"{dropped} dropped (SO_RXQ_OVFL, register can_rx_dropped)")
+expect(sent is not None and sent > 0 and got + dropped == sent,
+       "the burst is received whole or its loss is reported (received + dropped = sent)")
+summary["can"]["burst"] = {"sent": sent, "received": got, "dropped_reported": dropped}
+
+# ------------------------------------------------------------------ GPIO
+print(f"GPIO on gpio-sim (bench_player edges x{SCALE:g} time, RTU pressure on a pty -> brakefitd)")
+g_out = os.path.join(OUT, "gpio")
+player = open(os.path.join(g_out, "player.txt"), encoding="utf-8").read() \
+    if os.path.exists(os.path.join(g_out, "player.txt")) else ""
+print("    " + player.strip().replace("\n", "\n    "))
+pl = dict(re.findall(r"(\w+)=([^\s]+)", player.split("PLAY", 1)[1])) if "PLAY" in player else {}
+ginp = read_frames(os.path.join(g_out, "input.log"))
+grec = read_frames(os.path.join(g_out, "recorded.log"))
+want, have = net_counts(ginp), net_counts(grec)
+print(f"    net x4 counts: log {want}, the daemon's recording {have}")
+expect(bool(have) and have.get(0x100) == want.get(0x100) and have.get(0x101) == want.get(0x101),
+       "every driven edge was counted (net counts of the recording equal the log's)")
+g = regs(os.path.join(g_out, "regs_event.txt"))
+lost, illegal, flags = u32(g, 50), u32(g, 10), g.get(104, 0)
+print(f"    lost_edges {lost}, illegal_transitions {illegal}, event.flags 0x{flags:04x}")
+expect(((flags >> 5) & 1) == (1 if lost + illegal > 0 else 0),
+       "the event is flagged edges_lost exactly when edges were lost")
+gpub = published(g)
+gbench = os.path.join(g_out, "scaled.bench.toml")
+grec_docs = replay(os.path.join(g_out, "recorded.log"), gbench)
+gexact = bool(grec_docs) and all(f32_equal(gpub[m][f], v)
+                                 for m, ps in params(grec_docs[0]).items() for f, v in ps.items())
+expect(gexact, "replaying the daemon's recording gives the published parameters exactly (f32)")
+gref = replay(os.path.join(g_out, "input.log"), os.path.join(g_out, "ref.bench.toml"))
+rows = [["method", "param", "published", "replay(log)", "rel diff"]]
+gworst = {}
+if gref:
+    for m, ps in params(gref[0]).items():
+        for f in FIELDS:
+            a, b = gpub[m][f], ps[f]
+            rel = abs(a - b) / max(abs(b), 1e-9)
+            rows.append([m, f, f"{a:.5g}", f"{b:.5g}", f"{rel:.2e}"])
+            if m in GPIO_ASSERTED:
+                gworst[f] = max(gworst.get(f, 0.0), rel)
+table(rows)
+print("    NOT MET (reported, not asserted): worst relative difference of mlp/lm/hybrid "
+      + ", ".join(f"{f} {gworst.get(f, float('nan')):.1%}" for f in FIELDS))
+summary["gpio"] = {"scale": SCALE, "player": pl, "net_counts_log": {hex(k): v for k, v in want.items()},
+                   "net_counts_recorded": {hex(k): v for k, v in have.items()},
+                   "lost_edges": lost, "illegal_transitions": illegal,
+                   "recording_replays_exactly": gexact, "worst_rel_diff_vs_replay": gworst}
+
+# ------------------------------------------------------------------ edge loss
+print("Edge loss of the GPIO reader as it is delayed (one encoder, lines 0/1)")
+runs = []
+ep = os.path.join(OUT, "edges", "edges.txt")
+if os.path.exists(ep):
+    for ln in open(ep, encoding="utf-8"):
+        if ln.startswith("EDGES"):
+            runs.append({k: (v if k == "uapi" else float(v))
+                         for k, v in re.findall(r"(\w+)=([^\s]+)", ln)})
+rows = [["uapi", "fifo", "delay_ms", "edges/s", "driven", "counted", "illegal", "lost_rep"]]
+for r in runs:
+    rows.append([r["uapi"], int(r["buffer"]), int(r["delay_ms"]), int(r["rate_edges_per_s"]),
+                 int(r["driven"]), int(r["counted"]), int(r["illegal"]), int(r["lost_reported"])])
+table(rows)
+v2 = [r for r in runs if r["uapi"] == "v2" and r["buffer"] == 1024]
+expect(len(v2) == 4 and all(r["counted"] == r["driven"] and r["lost_reported"] == 0 and
+                            r["illegal"] == 0 for r in v2),
+       "v2 uAPI, 1024-event FIFO: every edge counted at reader delays 0, 1, 3, 10 ms")
+small = [r for r in runs if r["uapi"] == "v2" and r["buffer"] == 16]
+expect(len(small) == 1 and small[0]["lost_reported"] > 0,
+       "v2 uAPI with a 16-event FIFO and a 10 ms reader: the loss is reported")
+expect(all(r["counted"] == r["driven"] or r["lost_reported"] > 0 or r["illegal"] > 0
+           for r in runs if r["uapi"] == "v2"), "v2: no loss passes unnoticed")
+silent = [r for r in runs if r["uapi"] == "v1" and r["counted"] != r["driven"] and r["illegal"] == 0]
+print(f"    v1 (libgpiod 1.6): {len(silent)} of {sum(1 for r in runs if r['uapi'] == 'v1')} runs "
+      "miscounted with no illegal transition to show it (why the daemon uses v2)")
+summary["edges"] = runs
+
+with open(os.path.join(OUT, "summary.json"), "w", encoding="utf-8") as f:
+    json.dump(summary, f, indent=1)
+if failures:
+    print(f"vbench: {len(failures)} expectation(s) failed")
+    sys.exit(1)
+print("vbench: all expectations hold")
