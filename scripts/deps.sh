@@ -28,6 +28,8 @@ brakefit_build() {
   shift 2
   local launcher=()
   command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  # Paths under the source root hash relative, so a fresh clone elsewhere hits the same cache.
+  export CCACHE_BASEDIR="$BRAKEFIT_ROOT" CCACHE_NOHASHDIR=1
   cmake -S "$BRAKEFIT_ROOT" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE="$type" -DBRAKEFIT_WERROR=ON \
     "${launcher[@]}" "$@" >/dev/null
   cmake --build "$dir" --parallel "$(nproc)"

@@ -102,24 +102,31 @@ struct Pressure {
 };
 
 /// Edges of one encoder's frames: dcount steps spread evenly from the previous last-edge time to
-/// this frame's last-edge time (so the last one falls where the log says), on the frame clock.
+/// this frame's last-edge time (so the last one falls where the log says). The sender's edge clock
+/// is put on the frame clock by the offset that leaves every last edge at or before its frame
+/// (the smallest frame-minus-edge time: taking it from the first frame alone put the wheel's edges
+/// up to 0.3 ms late, and clamping them to their frame bunched them there).
 void encoder_edges(const std::vector<std::pair<std::int64_t, bf::can::EncoderMsg>>& msgs,
                    unsigned enc, std::vector<Edge>& out) {
   if (msgs.empty()) return;
-  const std::int64_t offset_us =
-      msgs.front().first - static_cast<std::int64_t>(msgs.front().second.edge_time_us);
-  std::int64_t prev_edge = msgs.front().first;
+  std::vector<std::int64_t> edge_us(msgs.size());
+  edge_us[0] = static_cast<std::int64_t>(msgs[0].second.edge_time_us);
+  for (std::size_t i = 1; i < msgs.size(); ++i)
+    edge_us[i] = edge_us[i - 1] + static_cast<std::int32_t>(msgs[i].second.edge_time_us -
+                                                            msgs[i - 1].second.edge_time_us);
+  std::int64_t offset_us = INT64_MAX;
+  for (std::size_t i = 1; i < msgs.size(); ++i)
+    if (msgs[i].second.count_x4_mod != msgs[i - 1].second.count_x4_mod)
+      offset_us = std::min(offset_us, msgs[i].first - edge_us[i]);
+  if (offset_us == INT64_MAX) return;  // the encoder never moved
+  std::int64_t prev_edge = edge_us[0] + offset_us;
   std::uint32_t prev_count = msgs.front().second.count_x4_mod;
-  std::int64_t edge_unwrap = static_cast<std::int64_t>(msgs.front().second.edge_time_us);
-  std::uint32_t prev_edge_raw = msgs.front().second.edge_time_us;
   for (std::size_t i = 1; i < msgs.size(); ++i) {
     const auto& m = msgs[i].second;
     auto d = static_cast<std::int32_t>((m.count_x4_mod - prev_count) & 0xFFFFFFu);
     if (d & 0x800000) d -= 0x1000000;
-    edge_unwrap += static_cast<std::int32_t>(m.edge_time_us - prev_edge_raw);
-    prev_edge_raw = m.edge_time_us;
     if (d == 0) continue;
-    const std::int64_t last = std::min(edge_unwrap + offset_us, msgs[i].first);
+    const std::int64_t last = edge_us[i] + offset_us;
     const int n = std::abs(d);
     for (int j = 1; j <= n; ++j)
       out.push_back({prev_edge + (last - prev_edge) * j / n, enc, d > 0});
@@ -235,6 +242,7 @@ int play(const std::string& log, const std::string& simdir, const std::string& p
   std::array<std::uint64_t, 4> driven{};
   std::int64_t worst_late_ns = 0, worst_at_us = 0;
   std::array<std::uint64_t, 3> late{};  // edges written more than 0.5, 2, 5 ms after their time
+  std::vector<std::uint64_t> late_by_tenth(64, 0);  // edges > 1 ms late per 0.1 s of log time
   const std::int64_t t0 = mono_ns() + 50'000'000;
   play_t0 = t0;
   for (const Edge& e : edges) {
@@ -248,6 +256,8 @@ int play(const std::string& log, const std::string& simdir, const std::string& p
       late[0] += l > 500'000;
       late[1] += l > 2'000'000;
       late[2] += l > 5'000'000;
+      if (l > 1'000'000)
+        ++late_by_tenth[std::min<std::size_t>(63, static_cast<std::size_t>(e.t_us / 100'000))];
       if (l > worst_late_ns) {
         worst_late_ns = l;
         worst_at_us = e.t_us;
@@ -272,6 +282,7 @@ int play(const std::string& log, const std::string& simdir, const std::string& p
       driven[3], static_cast<double>(edges.back().t_us) * 1e-6, scale, wall_s,
       static_cast<double>(edges.size()) / wall_s, static_cast<double>(worst_late_ns) * 1e-6,
       static_cast<double>(worst_at_us) * 1e-6, late[0], late[1], late[2], answered.load());
+  fmt::print("LATE_1MS_PER_TENTH {}\n", fmt::join(late_by_tenth, " "));
   std::fflush(stdout);
   // Keep answering (pressure at its last value) until killed: the daemon may still poll.
   rtu.join();

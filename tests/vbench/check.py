@@ -5,6 +5,7 @@ replay`, edges driven vs counted per reader delay) and exits 1 on any failed exp
 OUT/summary.json (brakefit.vbench/1).
 """
 import json
+import math
 import os
 import re
 import struct
@@ -18,14 +19,22 @@ METHODS = ["som", "mlp", "lm", "hybrid"]
 FIELDS = ["B", "C", "D", "E"]
 BENCH_IDS = {0x100, 0x101, 0x102, 0x103, 0x110, 0x120, 0x130}
 FOREIGN_IDS = {0x200, 0x7FF, 0x1ABCDEF0}
-# The GPIO path against `brakefit replay` of the played log: REPORTED, NOT ASSERTED (issue 11
-# stays open on it). The edges are counted exactly and the daemon's recording replays to exactly
-# the published event, but the slips the daemon measures from the kernel's edge times scatter
-# (0 to 20 % where the log has a smooth ramp), and the fits differ from the log's by 10-100 %.
-# Measured with time x6 at 1 ms and 6 ms frame periods, with and without -icount; the cause is
-# not yet found (player lateness explains only part: 35-200 edges > 0.5 ms late of 36 712).
-GPIO_REPORTED_ONLY = True
-GPIO_ASSERTED = ["mlp", "lm", "hybrid"]
+# The GPIO path against `brakefit replay` of the played log, within what the edge timing allows.
+# The edges are the log's, stretched x6 in time on a 6x coarser encoder, but written by a player
+# that shares one TCG vCPU with the daemon: 60-170 of 36 712 edges land > 0.5 ms late (up to
+# 16 ms, mostly while the daemon closes the event), so a few samples' slips move. What a station
+# sees is asserted: the fitted curves over the measured slip range (RMS within 8 %, worst point
+# within 15 % of the reference peak force; measured over 3 runs 2.7-5.8 % and 4.8-9.9 %), the peak
+# force within 2 % (measured 0.02 %), the peak slip within 0.05 (measured 0.007-0.029: one late
+# edge moves one sample), the point count within 1 % (measured 2-8 of 2 041), and D of the SOM
+# and the MLP within 5 % (measured 0.8-3 %). The daemon's edge reader runs SCHED_FIFO 20 here
+# (gpio.reader_rt_priority): as SCHED_OTHER it was once held off a whole 6 ms frame, and that
+# frame's wheel speed (no new edge) made one sample's slip 0.72. B, C, E are reported: LM's B, C and E
+# trade along a ridge on this event (the log's own fit has E at its bound 1.0; the GPIO run's
+# once has C at its bound 0.3 with a curve 5 % RMS from the reference), so they are not a
+# measure of the driver.
+CURVE_RMS_TOL, CURVE_MAX_TOL, PEAK_FORCE_TOL, PEAK_SLIP_TOL, POINTS_TOL, D_TOL = \
+    0.08, 0.15, 0.02, 0.05, 0.01, 0.05
 
 failures = []
 summary = {"schema": "brakefit.vbench/1", "version": 1}
@@ -224,15 +233,45 @@ if gref:
             a, b = gpub[m][f], ps[f]
             rel = abs(a - b) / max(abs(b), 1e-9)
             rows.append([m, f, f"{a:.5g}", f"{b:.5g}", f"{rel:.2e}"])
-            if m in GPIO_ASSERTED:
-                gworst[f] = max(gworst.get(f, 0.0), rel)
+            gworst[f] = max(gworst.get(f, 0.0), rel)
 table(rows)
-print("    NOT MET (reported, not asserted): worst relative difference of mlp/lm/hybrid "
-      + ", ".join(f"{f} {gworst.get(f, float('nan')):.1%}" for f in FIELDS))
+
+
+def mf(p, s):
+    x = p["B"] * s
+    return p["D"] * math.sin(p["C"] * math.atan(x - p["E"] * (x - math.atan(x))))
+
+
+curves = {}
+if gref:
+    smax = gref[0]["max_slip_ratio"]
+    grid = [smax * i / 200 for i in range(1, 201)]
+    for m, ps in params(gref[0]).items():
+        d = [mf(gpub[m], x) - mf(ps, x) for x in grid]
+        curves[m] = (math.sqrt(sum(v * v for v in d) / len(d)) / ps["D"],
+                     max(abs(v) for v in d) / ps["D"])
+    print("    fitted curves over the measured slip range, difference / reference peak force: "
+          + ", ".join(f"{m} RMS {r:.1%} max {x:.1%}" for m, (r, x) in curves.items()))
+    expect(all(r <= CURVE_RMS_TOL and x <= CURVE_MAX_TOL for r, x in curves.values()),
+           f"every method's curve within {CURVE_RMS_TOL:.0%} RMS and {CURVE_MAX_TOL:.0%} at worst")
+    pf, ps_, pts = f32(g, 109), f32(g, 111), g.get(108, 0)
+    print(f"    peak force {pf:.1f} N (replay {gref[0]['max_force_n']:.1f}), peak slip {ps_:.4f} "
+          f"(replay {smax:.4f}), points {pts} (replay {gref[0]['points']})")
+    expect(abs(pf - gref[0]["max_force_n"]) <= PEAK_FORCE_TOL * gref[0]["max_force_n"],
+           f"peak force within {PEAK_FORCE_TOL:.0%}")
+    expect(abs(ps_ - smax) <= PEAK_SLIP_TOL, f"peak slip within {PEAK_SLIP_TOL}")
+    expect(abs(pts - gref[0]["points"]) <= POINTS_TOL * gref[0]["points"],
+           f"point count within {POINTS_TOL:.0%}")
+    dref = params(gref[0])
+    expect(all(abs(gpub[m]["D"] - dref[m]["D"]) <= D_TOL * dref[m]["D"] for m in ("som", "mlp")),
+           f"D of the SOM and the MLP within {D_TOL:.0%}")
+else:
+    expect(False, "brakefit replay of the played log found its event")
 summary["gpio"] = {"scale": SCALE, "player": pl, "net_counts_log": {hex(k): v for k, v in want.items()},
                    "net_counts_recorded": {hex(k): v for k, v in have.items()},
                    "lost_edges": lost, "illegal_transitions": illegal,
-                   "recording_replays_exactly": gexact, "worst_rel_diff_vs_replay": gworst}
+                   "recording_replays_exactly": gexact, "worst_rel_diff_vs_replay": gworst,
+                   "curve_rms_max_vs_replay": curves}
 
 # ------------------------------------------------------------------ edge loss
 print("Edge loss of the GPIO reader as it is delayed (one encoder, lines 0/1)")
@@ -244,14 +283,16 @@ if os.path.exists(ep):
             runs.append({k: (v if k == "uapi" else float(v))
                          for k, v in re.findall(r"(\w+)=([^\s]+)", ln)})
 rows = [["uapi", "fifo", "delay_ms", "edges/s", "driven", "counted", "illegal", "lost_rep"]]
-for r in runs:
+for r in sorted(runs, key=lambda r: (r["period_us"], r["uapi"], r["buffer"], r["delay_ms"])):
     rows.append([r["uapi"], int(r["buffer"]), int(r["delay_ms"]), int(r["rate_edges_per_s"]),
                  int(r["driven"]), int(r["counted"]), int(r["illegal"]), int(r["lost_reported"])])
 table(rows)
 v2 = [r for r in runs if r["uapi"] == "v2" and r["buffer"] == 1024]
-expect(len(v2) == 4 and all(r["counted"] == r["driven"] and r["lost_reported"] == 0 and
+periods = sorted({int(r["period_us"]) for r in v2})
+expect(len(v2) == 4 * len(periods) and all(r["counted"] == r["driven"] and r["lost_reported"] == 0 and
                             r["illegal"] == 0 for r in v2),
-       "v2 uAPI, 1024-event FIFO: every edge counted at reader delays 0, 1, 3, 10 ms")
+       "v2 uAPI, 1024-event FIFO: every edge counted at reader delays 0, 1, 3, 10 ms, "
+       f"{', '.join(str(round(1e6 / p)) for p in periods)} edges/s")
 small = [r for r in runs if r["uapi"] == "v2" and r["buffer"] == 16]
 expect(len(small) == 1 and small[0]["lost_reported"] > 0,
        "v2 uAPI with a 16-event FIFO and a 10 ms reader: the loss is reported")

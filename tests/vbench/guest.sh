@@ -122,14 +122,16 @@ if [ -z "${VB_ONLY:-}" ] || [ "$VB_ONLY" = gpio ] || [ "$VB_ONLY" = edges ]; the
   if [ -n "${CHIP:-}" ]; then
     # Edge loss of the project's reader as it is delayed, both uAPIs.
     O=$VB_OUT/edges; mkdir -p "$O"; : > "$O/edges.txt"
-    for uapi in v1 v2; do
-      for delay in 0 1 3 10; do
-        "$PLAYER" edges "/dev/$CHIP" "$SIM" "$uapi" "$EDGE_COUNT" "$EDGE_PERIOD_US" "$delay" \
-          >> "$O/edges.txt" 2>&1
+    for period in $EDGE_PERIODS_US; do
+      for uapi in v1 v2; do
+        for delay in 0 1 3 10; do
+          "$PLAYER" edges "/dev/$CHIP" "$SIM" "$uapi" "$EDGE_COUNT" "$period" "$delay" \
+            >> "$O/edges.txt" 2>&1
+        done
       done
     done
     # The v2 FIFO shrunk to 16 events and a 10 ms reader: the loss must be reported.
-    "$PLAYER" edges "/dev/$CHIP" "$SIM" v2 "$EDGE_COUNT" "$EDGE_PERIOD_US" 10 16 >> "$O/edges.txt" 2>&1
+    "$PLAYER" edges "/dev/$CHIP" "$SIM" v2 "$EDGE_COUNT" 250 10 16 >> "$O/edges.txt" 2>&1
     say "edges: $(wc -l < "$O/edges.txt") runs"
   fi
 fi

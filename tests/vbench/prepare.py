@@ -120,6 +120,7 @@ wheel_a = 2
 wheel_b = 3
 uapi = "v2"
 frame_period_ms = @FRAME_MS@
+reader_rt_priority = 20
 
 [modbus_rtu]
 device = "@TTY@"
