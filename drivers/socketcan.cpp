@@ -58,6 +58,7 @@ CanSocket CanSocket::open(const std::string& iface, const std::vector<std::uint3
     throw SourceError(
         fmt::format("socketcan: no CAN interface '{}': {}", iface, std::strerror(errno)));
   std::vector<can_filter> filters;
+  filters.reserve(ids.size());
   for (std::uint32_t id : ids) filters.push_back({id, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
   if (::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
                    static_cast<socklen_t>(filters.size() * sizeof(can_filter))) < 0)

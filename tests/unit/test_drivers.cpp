@@ -25,6 +25,7 @@
 #include "drivers/replay.hpp"
 #include "drivers/socketcan.hpp"
 #include "test_util.hpp"
+#include "tests/tools/rtu_crc.hpp"
 
 using namespace brakefit;
 using namespace brakefit::drivers;
@@ -270,17 +271,6 @@ TEST(SocketCan, AbsentInterfaceOrKernelSupportIsNamed) {
 
 namespace {
 
-std::uint16_t crc16(const std::uint8_t* p, std::size_t n) {
-  std::uint16_t crc = 0xFFFF;
-  for (std::size_t i = 0; i < n; ++i) {
-    crc ^= p[i];
-    for (int b = 0; b < 8; ++b)
-      crc = (crc & 1) ? static_cast<std::uint16_t>((crc >> 1) ^ 0xA001)
-                      : static_cast<std::uint16_t>(crc >> 1);
-  }
-  return crc;
-}
-
 /// A Modbus RTU slave on the master side of a pty: answers FC 03/04 from a register table, or
 /// stays silent while `mute` is set.
 class FakeSlave {
@@ -317,7 +307,7 @@ class FakeSlave {
         buf.erase(buf.begin(), buf.begin() + 8);
         ++requests;
         if (mute) continue;
-        const std::uint16_t crc = crc16(req.data(), 6);
+        const std::uint16_t crc = brakefit::test::rtu_crc16(req.data(), 6);
         if (req[6] != (crc & 0xFF) || req[7] != (crc >> 8)) continue;
         const unsigned addr = (req[2] << 8) | req[3], qty = (req[4] << 8) | req[5];
         std::vector<std::uint8_t> resp{req[0], req[1], static_cast<std::uint8_t>(2 * qty)};
@@ -326,7 +316,7 @@ class FakeSlave {
           resp.push_back(static_cast<std::uint8_t>(v >> 8));
           resp.push_back(static_cast<std::uint8_t>(v & 0xFF));
         }
-        const std::uint16_t c = crc16(resp.data(), resp.size());
+        const std::uint16_t c = brakefit::test::rtu_crc16(resp.data(), resp.size());
         resp.push_back(static_cast<std::uint8_t>(c & 0xFF));
         resp.push_back(static_cast<std::uint8_t>(c >> 8));
         [[maybe_unused]] auto w = ::write(master_, resp.data(), resp.size());

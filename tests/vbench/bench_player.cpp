@@ -40,6 +40,7 @@
 #include "core/can/layout.hpp"
 #include "drivers/candump_file.hpp"
 #include "drivers/gpio.hpp"
+#include "tests/tools/rtu_crc.hpp"
 
 namespace bf = brakefit;
 
@@ -135,17 +136,6 @@ void encoder_edges(const std::vector<std::pair<std::int64_t, bf::can::EncoderMsg
   }
 }
 
-std::uint16_t crc16(const std::uint8_t* p, std::size_t n) {
-  std::uint16_t crc = 0xFFFF;
-  for (std::size_t i = 0; i < n; ++i) {
-    crc ^= p[i];
-    for (int b = 0; b < 8; ++b)
-      crc = (crc & 1) ? static_cast<std::uint16_t>((crc >> 1) ^ 0xA001)
-                      : static_cast<std::uint16_t>(crc >> 1);
-  }
-  return crc;
-}
-
 /// Modbus RTU slave 1 on a pty master: FC 04 (and 03) of register 0 -> the pressure now.
 void serve_rtu(int master, const std::vector<Pressure>& pressure,
                std::atomic<std::int64_t>& play_t0, double scale, std::atomic<bool>& stop,
@@ -160,7 +150,7 @@ void serve_rtu(int master, const std::vector<Pressure>& pressure,
     buf.insert(buf.end(), tmp, tmp + n);
     while (buf.size() >= 8) {
       if (buf[0] != 1 || (buf[1] != 4 && buf[1] != 3) ||
-          crc16(buf.data(), 6) != (buf[6] | (buf[7] << 8))) {
+          brakefit::test::rtu_crc16(buf.data(), 6) != (buf[6] | (buf[7] << 8))) {
         buf.erase(buf.begin());  // not a request to us: resynchronise byte by byte
         continue;
       }
@@ -183,7 +173,7 @@ void serve_rtu(int master, const std::vector<Pressure>& pressure,
         r.push_back(static_cast<std::uint8_t>(v >> 8));
         r.push_back(static_cast<std::uint8_t>(v & 0xFF));
       }
-      const std::uint16_t c = crc16(r.data(), r.size());
+      const std::uint16_t c = brakefit::test::rtu_crc16(r.data(), r.size());
       r.push_back(static_cast<std::uint8_t>(c & 0xFF));
       r.push_back(static_cast<std::uint8_t>(c >> 8));
       if (::write(master, r.data(), r.size()) < 0) break;

@@ -4,7 +4,9 @@
 #    $BRAKEFIT_VBENCH_CACHE, default ~/.cache/brakefit/vbench); exit 77 = skipped, says why.
 # 2. prepare.py: the scenario inputs and daemon configs in BUILD_DIR/vbench.
 # 3. QEMU (TCG, 1 vCPU: on 2 the kernel merges edges under TCG) boots it; guest.sh runs the
-#    scenarios with BUILD_DIR's binaries over the 9p-shared host root.
+#    scenarios with BUILD_DIR's binaries over the 9p-shared host root. -icount shift=3,sleep=off:
+#    guest time counts executed instructions and skips idle time, so neither host load nor host
+#    hiccups move an edge in guest time (other tests may run beside it).
 # 4. check.py compares the guest's figures with `brakefit replay` and fails on any mismatch.
 set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
@@ -37,7 +39,7 @@ VB_ONLY=${VBENCH_ONLY:-}
 EOF
 t_boot=$(date +%s.%N)
 set +e
-timeout 300 qemu-system-x86_64 -accel tcg -cpu max ${VBENCH_QEMU_EXTRA--icount shift=3,sleep=on} -smp 1 -m 1024 -nographic -no-reboot \
+timeout 300 qemu-system-x86_64 -accel tcg -cpu max ${VBENCH_QEMU_EXTRA--icount shift=3,sleep=off} -smp 1 -m 1024 -nographic -no-reboot \
   -kernel "$K/root/boot/vmlinuz-$KVER" -initrd "$K/initramfs.cpio.gz" \
   -append "console=ttyS0 quiet loglevel=4 panic=-1 vb_script=$HERE/guest.sh vb_rc=$OUT/rc vb_env=$OUT/env.sh" \
   -fsdev local,id=r,path=/,security_model=none,multidevs=remap \
