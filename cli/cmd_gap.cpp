@@ -90,7 +90,7 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
 
 void write_report(const std::string& dir, const gap::Report& r, const std::vector<gap::Run>& runs,
                   const nlohmann::ordered_json& doc) {
-  std::filesystem::create_directories(dir);
+  make_output_dir(dir);
   // Residual map: baseline residual against slip, one series per run.
   plot::XyChart res{"Residual of the 4-parameter fit (measured - model)",
                     "slip [%]",

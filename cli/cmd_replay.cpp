@@ -61,7 +61,7 @@ void add_replay_command(CLI::App& app) {
       spdlog::info("replaying {}", f);
       runs.push_back(process_run(f, o->run, &model));
     }
-    if (!o->report.empty()) std::filesystem::create_directories(o->report);
+    if (!o->report.empty()) make_output_dir(o->report);
     std::string jsonl;
     std::vector<LeftOut> left_out;  // flagged events: in their JSON (flags) and on stderr
     for (const Run& run : runs) {
@@ -118,7 +118,7 @@ void add_export_command(CLI::App& app) {
   add_run_options(cmd, o->run, o->force);
   cmd->callback([o] {
     o->run.pipeline.fit = false;
-    std::filesystem::create_directories(o->dir);
+    make_output_dir(o->dir);
     for (const auto& f : o->files) {
       const Run run = process_run(f, o->run, nullptr);
       for (const auto& e : run.events) {

@@ -42,6 +42,15 @@ void write_file(const std::string& path, const std::string& content) {
                     fmt::format("{}: cannot rename into place: {}", path, std::strerror(errno)));
 }
 
+void make_output_dir(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir))
+    throw ExitError(kExitCantCreate,
+                    fmt::format("{}: cannot create the output directory: {}", dir,
+                                ec ? ec.message() : "a file of that name is in the way"));
+}
+
 std::string resolve_model_path(const std::string& given) {
   if (!given.empty()) return given;
   if (const char* env = std::getenv("BRAKEFIT_MODEL"); env && *env) return env;

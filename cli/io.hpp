@@ -17,6 +17,8 @@ using brakefit::kExitNoInput;
 std::string read_file(const std::string& path);
 /// Writes via a temporary file and rename, so a reader never sees half a file.
 void write_file(const std::string& path, const std::string& content);
+/// Creates an output directory (and its parents); ExitError 73 naming it and the system's reason.
+void make_output_dir(const std::string& dir);
 /// The model given, else $BRAKEFIT_MODEL, else the default model shipped in data/models/.
 std::string resolve_model_path(const std::string& given);
 Model load_model(const std::string& path);

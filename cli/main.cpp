@@ -37,7 +37,9 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version exit 0; every other parse error is a usage error (sysexits 64), not
+    // CLI11's own 105-115.
+    return app.exit(e) == 0 ? 0 : brakefit::kExitUsage;
   } catch (const brakefit::cli::ExitError& e) {
     std::cerr << "brakefit: error: " << e.what() << "\n";
     return e.code;
@@ -46,7 +48,7 @@ int run(int argc, char** argv) {
     return brakefit::cli::kExitDataError;
   } catch (const std::exception& e) {
     std::cerr << "brakefit: internal error: " << e.what() << "\n";
-    return 1;
+    return brakefit::kExitSoftware;
   }
   return 0;
 }
@@ -58,6 +60,6 @@ int main(int argc, char** argv) {
     return run(argc, argv);
   } catch (...) {  // setting up logging or the parser failed
     std::fputs("brakefit: internal error during start-up\n", stderr);
-    return 1;
+    return brakefit::kExitSoftware;
   }
 }

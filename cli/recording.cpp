@@ -57,6 +57,19 @@ Run process_run(const std::string& path, const RunOptions& o, const Model* model
   run.stats = p.sample_stats();
   if (run.stats.unknown_ids)
     spdlog::info("{}: {} frames with unknown ids ignored", path, run.stats.unknown_ids);
+  // A log cut short: its last line without a newline, frames shorter than their message, or no
+  // frames at all. Warned and counted (run.truncated), never silent.
+  if (!text.empty() && text.back() != '\n') {
+    ++run.truncated;
+    spdlog::warn("{}: the last line has no newline: the log was cut (its last frame may be short)",
+                 path);
+  }
+  if (run.stats.short_frames) {
+    run.truncated += run.stats.short_frames;
+    spdlog::warn("{}: {} frame(s) shorter than their message ignored (a log cut mid-frame)", path,
+                 run.stats.short_frames);
+  }
+  if (log.frames.empty()) spdlog::warn("{}: no CAN frames in the log", path);
   run.events = std::move(p.events());
   return run;
 }

@@ -25,6 +25,7 @@ struct Run {
   pipeline::SampleStats stats;
   std::size_t malformed_lines = 0;
   std::size_t ignored_lines = 0;
+  std::size_t truncated = 0;  ///< a cut log: last line without newline + frames short of their DLC
 };
 
 Run process_run(const std::string& path, const RunOptions& o, const Model* model);

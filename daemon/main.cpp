@@ -25,6 +25,8 @@ extern "C" void on_signal(int sig) {
 int main(int argc, char** argv) {
   using namespace brakefit::daemon;
   using brakefit::kExitConfig;
+  using brakefit::kExitSoftware;
+  using brakefit::kExitUsage;
   CLI::App app{"brakefitd: roller brake tester data acquisition, fitting and Modbus publishing"};
   std::string config_path = "/etc/brakefit/brakefitd.toml";
   bool check = false, print_map = false;
@@ -33,7 +35,11 @@ int main(int argc, char** argv) {
   app.add_flag("--print-register-map", print_map,
                "print the Modbus register map as CSV (config/modbus_registers.csv) and exit");
   app.set_version_flag("--version", std::string(brakefit::kVersion));
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : kExitUsage;  // --help/--version 0; else usage (64)
+  }
   // Under systemd (stderr is the journal) levels go to the journal as priorities; else stderr.
   if (std::getenv("JOURNAL_STREAM")) {
     spdlog::set_default_logger(std::make_shared<spdlog::logger>(
@@ -75,6 +81,6 @@ int main(int argc, char** argv) {
     return e.code;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
-    return 70;
+    return kExitSoftware;
   }
 }

@@ -72,6 +72,10 @@ std::optional<Sample> SampleBuilder::feed(const can::LoggedFrame& f) {
     ++stats_.unknown_ids;
     return out;
   }
+  if (f.frame.len < can::message(f.frame.id).dlc) {
+    ++stats_.short_frames;  // cut mid-frame (a log truncated at a byte boundary): not decoded
+    return out;
+  }
   if (const auto* e = std::get_if<can::EncoderMsg>(&*msg)) {
     const bool is_ref = cal_.bench == can::BenchKind::Roller
                             ? e->channel == can::Channel::Roller

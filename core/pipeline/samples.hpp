@@ -52,6 +52,7 @@ struct SampleStats {
   std::size_t counter_gaps = 0;     ///< lost frames detected by rolling counters
   std::size_t encoder_resyncs = 0;  ///< encoder edge clocks that restarted (EncoderSpeed::resyncs)
   std::size_t encoder_faults = 0;   ///< lost edges + illegal transitions the GPIO reader reported
+  std::size_t short_frames = 0;     ///< layout ids with fewer data bytes than their DLC (a cut log)
 };
 
 /// A sample is emitted once its time group is complete: at the next wheel-encoder frame or at the

@@ -132,9 +132,50 @@ class BadInput(unittest.TestCase):
             self.assertIn("key 'som.neighborhood': unknown key", r.stderr)
             self.assertFalse(os.path.exists(os.path.join(d, "m.json")))
 
-    def test_usage_error(self):
-        r = run("fit", "--method", "magic", os.path.join(CURVES, "roller_car_1bar.csv"))
-        self.assertNotEqual(r.returncode, 0)
+    def test_exit_codes_follow_the_readme_table(self):
+        with open(os.path.join(ROOT, "README.md"), encoding="utf-8") as f:
+            readme = f.read()
+        table = readme[readme.index("## Exit codes"):]
+        table = table[:table.index("\n## ")]
+        codes = {int(c) for c in re.findall(r"^\| (\d+) \|", table, re.M)}
+        with open(os.path.join(ROOT, "core", "exit_codes.hpp"), encoding="utf-8") as f:
+            header = {int(c) for c in re.findall(r"= (\d+);", f.read())}
+        self.assertEqual(codes, header | {0}, "README table and core/exit_codes.hpp differ")
+        curve = os.path.join(CURVES, "roller_car_1bar.csv")
+        log = os.path.join(ROOT, "data", "recorded", "roller_1p0bar_fast.log")
+        bench = os.path.join(ROOT, "data", "recorded", "roller_1p0bar_fast.bench.toml")
+        with tempfile.TemporaryDirectory() as d:
+            blocker = write(d, "a_file", "x")
+            cases = {
+                0: [("--version",)],
+                64: [("fit", "--method", "magic", curve), ("fit", "--no-such-option", curve),
+                     ("compare", log, log, log), ("replay",)],
+                65: [("fit", write(d, "bad.csv", "slip,force_n\n0.1,x\n"))],
+                66: [("fit", os.path.join(d, "missing.csv"))],
+                73: [("replay", "--report", os.path.join(blocker, "report"), log),
+                     ("fit", "--plot", os.path.join(blocker, "p.svg"), curve)],
+                78: [("train", "--config", write(d, "c.toml", "[som]\nrows = -1\n"),
+                      "--out", os.path.join(d, "m.json"))],
+            }
+            for code, commands in cases.items():
+                for args in commands:
+                    r = run(*args)
+                    self.assertEqual(r.returncode, code, f"{args}: {r.stderr}")
+                    if code:
+                        self.assertNotIn("internal error", r.stderr, args)
+            # A log cut mid-frame at a byte boundary, and an empty log: done, with a warning
+            # and a count.
+            with open(log, encoding="utf-8") as f:
+                text = f.read()
+            cut = write(d, "cut.log", text[: text.index("\n", len(text) // 2) + 34])
+            r = run("replay", "--bench", bench, cut)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("the last line has no newline: the log was cut", r.stderr)
+            self.assertRegex(r.stderr, r"1 frame\(s\) shorter than their message ignored")
+            empty = write(d, "empty.log", "")
+            r = run("replay", "--bench", bench, empty)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("no CAN frames in the log", r.stderr)
 
 
 def svg_series(path):

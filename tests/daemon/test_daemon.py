@@ -281,6 +281,10 @@ class DaemonTest(unittest.TestCase):
         out = subprocess.run([DAEMON, "--config", os.path.join(ROOT, "config", "brakefitd.toml"),
                               "--check"], capture_output=True, text=True)
         self.assertEqual(out.returncode, 0, out.stderr)
+        # A usage error is 64 (the README's table), not CLI11's own 109.
+        out = subprocess.run([DAEMON, "--no-such-option"], capture_output=True, text=True)
+        self.assertEqual(out.returncode, 64, out.stderr)
+        self.assertIn("--no-such-option", out.stderr)
 
     def test_absent_sources_exit_nonzero_naming_them(self):
         store = os.path.join(self.tmp, "e.db")
