@@ -1,25 +1,33 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages brakefit needs (only the missing ones). Sourced by demo and test.
 set -euo pipefail
-BRAKEFIT_DEBS=(build-essential cmake ninja-build ccache pkg-config python3 libxml2-utils can-utils
+# What building needs (scripts/demo installs these only) ...
+BRAKEFIT_BUILD_DEBS=(build-essential cmake ninja-build ccache pkg-config python3
   libeigen3-dev libspdlog-dev libfmt-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libssl-dev libgtest-dev libgmock-dev libbenchmark-dev
-  libmodbus-dev libsqlite3-dev sqlite3 libsystemd-dev libgpiod-dev gpiod mbpoll systemd)
+  libmodbus-dev libsqlite3-dev libsystemd-dev libgpiod-dev)
+# ... and what the tests run against (scripts/test adds these): third-party clients and tools.
+BRAKEFIT_TEST_DEBS=(libxml2-utils can-utils sqlite3 gpiod mbpoll systemd)
 
+# brakefit_install_deps [test]: installs the missing packages only, never upgrading an installed
+# one (--no-upgrade). Without root, nothing is installed: it names what is missing and the command
+# to run as root, and fails; with everything present it needs no root at all.
 brakefit_install_deps() {
-  local missing=()
-  for p in "${BRAKEFIT_DEBS[@]}"; do
+  local want=("${BRAKEFIT_BUILD_DEBS[@]}") missing=()
+  [ "${1:-}" = test ] && want+=("${BRAKEFIT_TEST_DEBS[@]}")
+  for p in "${want[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   if [ ${#missing[@]} -eq 0 ]; then return 0; fi
-  echo "brakefit: installing missing Debian packages: ${missing[*]}"
   if [ "$(id -u)" -ne 0 ]; then
-    echo "brakefit: need root to apt-get install: ${missing[*]}" >&2
+    echo "brakefit: missing Debian packages: ${missing[*]}" >&2
+    echo "brakefit: as root, run: apt-get install --no-install-recommends --no-upgrade ${missing[*]}" >&2
     return 1
   fi
+  echo "brakefit: installing missing Debian packages (no upgrades): ${missing[*]}"
   export DEBIAN_FRONTEND=noninteractive
   apt-get update -qq
-  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  apt-get install -y -qq --no-install-recommends --no-upgrade "${missing[@]}"
 }
 
 # brakefit_build DIR BUILD_TYPE [extra cmake args...]

@@ -263,3 +263,44 @@ class AccuracyBenchSmoke(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class Scripts(unittest.TestCase):
+    """scripts/deps.sh: never upgrades, and without root installs nothing and says what to run."""
+
+    def deps(self, extra_package=None):
+        with tempfile.TemporaryDirectory() as d:
+            os.chmod(d, 0o755)
+            script = os.path.join(d, "deps.sh")
+            with open(os.path.join(ROOT, "scripts", "deps.sh"), encoding="utf-8") as f:
+                text = f.read()
+            if extra_package:
+                text = text.replace("BRAKEFIT_TEST_DEBS=(", f"BRAKEFIT_TEST_DEBS=({extra_package} ")
+            with open(script, "w", encoding="utf-8") as f:
+                f.write(text)
+            os.chmod(script, 0o644)
+            cmd = ["bash", "-c", f"source {script}; brakefit_install_deps test"]
+            if os.getuid() == 0:  # run it as nobody, as a non-root user would
+                cmd = ["setpriv", "--reuid=nobody", "--regid=nogroup", "--clear-groups"] + cmd
+            return subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+
+    def test_non_root_with_everything_present_needs_nothing(self):
+        r = self.deps()
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(r.stdout + r.stderr, "")
+
+    def test_non_root_with_a_package_missing_says_what_to_run_as_root(self):
+        r = self.deps("brakefit-no-such-package")
+        self.assertEqual(r.returncode, 1)
+        self.assertNotIn("installing", r.stdout + r.stderr)
+        self.assertIn("as root, run: apt-get install --no-install-recommends --no-upgrade "
+                      "brakefit-no-such-package", r.stderr)
+
+    def test_installs_never_upgrade(self):
+        with open(os.path.join(ROOT, "scripts", "deps.sh"), encoding="utf-8") as f:
+            text = f.read()
+        installs = re.findall(r"apt-get install[^\n]*", text)
+        self.assertTrue(installs)
+        for line in installs:
+            self.assertIn("--no-upgrade", line)
+
