@@ -1,6 +1,7 @@
 // brakefit events list|show|export: reads brakefitd's event store (read-only).
 #include <fmt/format.h>
 
+#include <ctime>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -34,11 +35,21 @@ daemon::StoredEvent get_event(const daemon::EventStore& s, const std::string& pa
   return *e;
 }
 
+/// "2026-11-23T15:10:00Z" (UTC, ISO 8601).
+std::string iso8601_utc(std::int64_t unix_s) {
+  const auto t = static_cast<std::time_t>(unix_s);
+  std::tm tm{};
+  if (!gmtime_r(&t, &tm)) return std::to_string(unix_s);
+  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}Z", tm.tm_year + 1900, tm.tm_mon + 1,
+                     tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+}
+
 nlohmann::ordered_json stored_json(const daemon::StoredEvent& e) {
   nlohmann::ordered_json j;
   j["schema"] = "brakefit.stored_event/1";
   j["version"] = kVersion;
   j["id"] = e.id;
+  j["created"] = iso8601_utc(e.created_unix_s);
   j["created_unix_s"] = e.created_unix_s;
   j["vehicle_id"] = e.vehicle_id;
   j["source"] = e.source;
@@ -61,19 +72,21 @@ void add_events_command(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand("events", "Read brakefitd's event store");
   cmd->require_subcommand(1);
-  cmd->add_option("--db", o->db, "event store (SQLite)")->capture_default_str();
+  cmd->add_option("--db", o->db, "event store (SQLite); before or after the subcommand")
+      ->capture_default_str();
 
   auto* list = cmd->add_subcommand("list", "The newest events, one line each");
   list->add_option("--limit", o->limit, "how many")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
   list->add_flag("--json", o->json, "one brakefit.stored_event/1 document per line");
+  list->fallthrough();  // --db after `list` too
   list->callback([o] {
     auto s = open_store(o->db);
     const auto events = s->list(o->limit);
     if (!o->json)
-      std::cout << fmt::format("{:>6}  {:<10}  {:<16}  {:<6}  {:<15}  {:<14}  {:>5}  {}\n", "id",
-                               "created", "vehicle", "bench", "end", "flags", "pts",
+      std::cout << fmt::format("{:>6}  {:<20}  {:<16}  {:<6}  {:<15}  {:<14}  {:>5}  {}\n", "id",
+                               "created (UTC)", "vehicle", "bench", "end", "flags", "pts",
                                "hybrid B C D E");
     for (const auto& e : events) {
       if (o->json) {
@@ -88,14 +101,16 @@ void add_events_command(CLI::App& app) {
               r["B"].is_number())
             fit = fmt::format("{:.3f} {:.4f} {:.1f} {:.4f}", r["B"].get<double>(),
                               r["C"].get<double>(), r["D"].get<double>(), r["E"].get<double>());
-      std::cout << fmt::format("{:>6}  {:<10}  {:<16}  {:<6}  {:<15}  {:<14}  {:>5}  {}\n", e.id,
-                               e.created_unix_s, e.vehicle_id.empty() ? "-" : e.vehicle_id, e.bench,
-                               e.end_reason, e.flags.empty() ? "-" : e.flags, e.points, fit);
+      std::cout << fmt::format("{:>6}  {:<20}  {:<16}  {:<6}  {:<15}  {:<14}  {:>5}  {}\n", e.id,
+                               iso8601_utc(e.created_unix_s),
+                               e.vehicle_id.empty() ? "-" : e.vehicle_id, e.bench, e.end_reason,
+                               e.flags.empty() ? "-" : e.flags, e.points, fit);
     }
   });
 
   auto* show = cmd->add_subcommand("show", "One event: results and provenance as JSON");
   show->add_option("id", o->id, "event id")->required();
+  show->fallthrough();
   show->callback([o] {
     auto s = open_store(o->db);
     std::cout << stored_json(get_event(*s, o->db, o->id)).dump(2) << "\n";
@@ -103,6 +118,7 @@ void add_events_command(CLI::App& app) {
 
   auto* exp = cmd->add_subcommand("export", "One event's raw samples as an event CSV");
   exp->add_option("id", o->id, "event id")->required();
+  exp->fallthrough();
   exp->add_option("--out", o->out, "CSV file (brakefit replay/gap read it)")->required();
   exp->callback([o] {
     auto s = open_store(o->db);

@@ -231,6 +231,18 @@ class DaemonTest(unittest.TestCase):
                                      capture_output=True, text=True, timeout=30)
                 self.assertEqual(out.returncode, 65)
                 self.assertIn("no event with id 99", out.stderr)
+                # Options anywhere on the line; times in ISO 8601 (UTC).
+                out = subprocess.run([CLI, "events", "list", "--db", store, "--limit", "2"],
+                                     capture_output=True, text=True, timeout=30)
+                self.assertEqual(out.returncode, 0, out.stderr)
+                rows = out.stdout.splitlines()
+                self.assertEqual(len(rows), 3, out.stdout)  # header + 2
+                self.assertRegex(rows[1], r"^\s+3\s+\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ\s")
+                out = subprocess.run([CLI, "events", "show", "1", "--db", store],
+                                     capture_output=True, text=True, timeout=30)
+                self.assertEqual(out.returncode, 0, out.stderr)
+                shown = json.loads(out.stdout)
+                self.assertRegex(shown["created"], r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ$")
                 stats = json.loads(read_text(d.stats))
                 self.assertEqual(stats["events"], 3)
                 self.assertEqual(stats["publish_latency_us"]["n"], 3)
