@@ -42,11 +42,17 @@ std::vector<std::string> expand(const std::string& p) {
   return out;
 }
 
-Side load_side(const std::string& path, const RunOptions& ro, const Model& model, Method method) {
+/// One side from its runs (files or directories of them); label names it in tables and plots.
+Side load_side(const std::vector<std::string>& paths, const std::string& label,
+               const RunOptions& ro, const Model& model, Method method) {
   Side s;
-  s.label = std::filesystem::path(path).filename().string();
-  s.files = expand(path);
-  if (s.files.empty()) throw InputError(path + ": no .log or .csv runs in this directory");
+  s.label = label;
+  for (const auto& p : paths) {
+    const auto files = expand(p);
+    if (files.empty()) throw InputError(p + ": no .log or .csv runs in this directory");
+    s.files.insert(s.files.end(), files.begin(), files.end());
+  }
+  const std::string path = label;
   for (const auto& f : s.files) {
     Run run = process_run(f, ro, &model);
     leave_out_if_empty(s.left_out, run);
@@ -118,6 +124,7 @@ nlohmann::ordered_json side_json(const Side& s) {
 void add_compare_command(CLI::App& app) {
   struct Opts {
     std::string a, b, model, svg, method = "hybrid", force = "pressure";
+    std::vector<std::string> roller, road;
     bool json = false;
     RunOptions run;
   };
@@ -125,11 +132,12 @@ void add_compare_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "compare", "Compare two recordings or event sets (e.g. roller vs flat ground)");
   cmd->add_option("a", o->a,
-                  "first recording, event CSV or directory of them (e.g. the roller tests)")
-      ->required();
+                  "first recording, event CSV or directory of them (e.g. the roller tests)");
   cmd->add_option("b", o->b,
-                  "second recording, event CSV or directory (e.g. the flat-ground tests)")
-      ->required();
+                  "second recording, event CSV or directory (e.g. the flat-ground tests)");
+  cmd->add_option("--roller", o->roller,
+                  "instead of A B: the roller runs (any number of files or directories)");
+  cmd->add_option("--road", o->road, "with --roller: the flat-ground runs");
   cmd->add_option("--method", o->method, "identification method")
       ->check(CLI::IsMember({"som", "mlp", "lm", "hybrid"}))
       ->capture_default_str();
@@ -147,8 +155,24 @@ void add_compare_command(CLI::App& app) {
     o->run.pipeline.methods = {method};
     o->run.pipeline.force =
         o->force == "tester" ? pipeline::ForceSource::Tester : pipeline::ForceSource::Pressure;
-    const Side a = load_side(o->a, o->run, model, method),
-               b = load_side(o->b, o->run, model, method);
+    const bool positional = !o->a.empty() || !o->b.empty();
+    const bool named = !o->roller.empty() || !o->road.empty();
+    if (positional == named || (positional && (o->a.empty() || o->b.empty())) ||
+        (named && (o->roller.empty() || o->road.empty())))
+      throw ExitError(kExitUsage,
+                      "compare: give A B (two runs or directories), or --roller RUNS... --road "
+                      "RUNS...");
+    auto name = [](const std::string& p) { return std::filesystem::path(p).filename().string(); };
+    auto runs_label = [](const char* what, const std::vector<std::string>& v) {
+      return v.size() == 1 ? std::filesystem::path(v[0]).filename().string()
+                           : fmt::format("{} ({} runs)", what, v.size());
+    };
+    const Side a =
+        positional ? load_side({o->a}, name(o->a), o->run, model, method)
+                   : load_side(o->roller, runs_label("roller", o->roller), o->run, model, method);
+    const Side b = positional
+                       ? load_side({o->b}, name(o->b), o->run, model, method)
+                       : load_side(o->road, runs_label("road", o->road), o->run, model, method);
     if (!o->svg.empty()) {
       plot::XyChart c;
       c.title = fmt::format("{} vs {} ({} fits)", a.label, b.label, o->method);

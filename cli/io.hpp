@@ -13,6 +13,7 @@ using brakefit::kExitCantCreate;
 using brakefit::kExitConfig;
 using brakefit::kExitDataError;
 using brakefit::kExitNoInput;
+using brakefit::kExitUsage;
 
 std::string read_file(const std::string& path);
 /// Writes via a temporary file and rename, so a reader never sees half a file.

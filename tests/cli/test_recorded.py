@@ -141,6 +141,33 @@ class ExportAndCompare(unittest.TestCase):
             self.assertEqual(texts["x-label"], "slip [%]")
             self.assertEqual(texts["y-label"], "brake force [N]")
 
+    def test_compare_several_runs_per_side_as_the_shell_expands_them(self):
+        roller = sorted(glob.glob(os.path.join(REC, "roller_1p0bar_*.log")))
+        road = sorted(glob.glob(os.path.join(REC, "ground_1p0bar_*.log")))
+        r = run("compare", "--json", "--roller", *roller, "--road", *road)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        doc = json.loads(r.stdout)
+        self.assertEqual(doc["a"]["files"], roller)
+        self.assertEqual(doc["b"]["files"], road)
+        self.assertEqual(doc["a"]["label"], "roller (3 runs)")
+        self.assertEqual(doc["a"]["events"], 3)
+        # The same runs as one directory per side give the same pooled fit.
+        with tempfile.TemporaryDirectory() as d:
+            for side, files in (("r", roller), ("g", road)):
+                os.mkdir(os.path.join(d, side))
+                for f in files:
+                    for ext in (".log", ".bench.toml"):
+                        shutil.copy(f[:-4] + ext, os.path.join(d, side))
+            r2 = run("compare", "--json", os.path.join(d, "r"), os.path.join(d, "g"))
+            self.assertEqual(r2.returncode, 0, r2.stderr)
+            self.assertAlmostEqual(json.loads(r2.stdout)["a"]["D"], doc["a"]["D"], delta=1e-6)
+        # Half of a pair, or both forms at once, is a usage error.
+        for args in (("--roller", roller[0]),
+                     (roller[0], road[0], "--roller", roller[1], "--road", road[1])):
+            r = run("compare", *args)
+            self.assertEqual(r.returncode, 64, r.stderr)
+            self.assertIn("--roller RUNS... --road RUNS...", r.stderr)
+
 
 @unittest.skipUnless(shutil.which("log2asc"), "can-utils' log2asc is not installed")
 class CanUtilsCompatibility(unittest.TestCase):
@@ -332,3 +359,31 @@ class Gap(unittest.TestCase):
             self.assertAlmostEqual(doc["parameters_before"][k], doc["parameters_after"][k], 9)
         r = run("gap", "--roller", *roller)
         self.assertEqual(r.returncode, 78)
+
+
+class ReadmeTour(unittest.TestCase):
+    """Every command of the README's tour, as written, with the binaries on PATH as it says."""
+
+    def test_every_tour_command_runs_as_written(self):
+        with open(os.path.join(ROOT, "README.md"), encoding="utf-8") as f:
+            readme = f.read()
+        tour = readme[readme.index("## A short tour"):]
+        tour = tour[:tour.index("\n- ")]
+        commands = [ln[4:] for ln in tour.splitlines() if ln.startswith("    brakefit")]
+        self.assertGreaterEqual(len(commands), 5, tour)
+        path_line = [ln[4:] for ln in tour.splitlines() if ln.startswith("    export PATH=")]
+        self.assertEqual(len(path_line), 1)
+        bindir = os.path.dirname(BIN)
+        with tempfile.TemporaryDirectory() as d:
+            # The clone's root as the tour sees it: its data, scenarios and config; the outputs
+            # land here, not in the source tree.
+            for sub in ("data", "sim", "config"):
+                os.symlink(os.path.join(ROOT, sub), os.path.join(d, sub))
+            env = dict(os.environ, PATH=bindir + os.pathsep + os.environ["PATH"])
+            for cmd in commands:
+                r = subprocess.run(["bash", "-c", cmd], cwd=d, env=env, capture_output=True,
+                                   text=True, timeout=600)
+                self.assertEqual(r.returncode, 0, f"{cmd}\n{r.stderr[-2000:]}")
+        # The PATH line names the directories the build writes the binaries to.
+        self.assertIn("build/release/cli", path_line[0])
+
