@@ -8,8 +8,8 @@
 #include "brakefit/version.hpp"
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
-#include "core/event_json.hpp"
 #include "core/curve_csv.hpp"
+#include "core/event_json.hpp"
 #include "core/plot/charts.hpp"
 
 namespace brakefit::cli {
@@ -108,15 +108,16 @@ void add_fit_command(CLI::App& app) {
                                model ? model->hash.substr(0, 19) : "none");
       std::cout << fmt::format("  {:<7} {:>10} {:>7} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9}  {}\n",
                                "method", pct ? "B [1/%]" : "B [1/-]", "C", "D [N]", "E", "MAPE %",
-                               "RMSE N", "peak N", pct ? "peak %" : "peak [-]", "peak in data");
+                               "RMSE N", "peak N", pct ? "peak %" : "peak [-]", "notes");
       for (const auto& r : all[i]) {
         const MfPeak pk = mf_peak(r.params, 1.0);
+        const std::string notes = result_notes(r, c.max_slip_ratio());
         std::cout << fmt::format(
             "  {:<7} {:>10.4f} {:>7.4f} {:>9.1f} {:>8.4f} {:>8.3f} {:>8.2f} {:>9.1f} {:>9.4f}  "
             "{}\n",
             to_string(r.method), pct ? r.params.B / 100.0 : r.params.B, r.params.C, r.params.D,
             r.params.E, r.metrics.mape_pct, r.metrics.rmse_n, pk.force_n,
-            pct ? pk.slip_ratio * 100.0 : pk.slip_ratio, r.peak_reached ? "yes" : "NO");
+            pct ? pk.slip_ratio * 100.0 : pk.slip_ratio, notes.empty() ? "-" : notes);
         if (r.stderr_) {
           const auto& s = *r.stderr_;
           std::cout << fmt::format(

@@ -87,13 +87,14 @@ void add_replay_command(CLI::App& app) {
             100 * e.curve.max_slip_ratio(), e.event.end_reason,
             e.event.flags.empty() ? ""
                                   : fmt::format(" [flags: {}]", fmt::join(e.event.flags, ", ")));
-        for (const auto& r : e.results)
+        for (const auto& r : e.results) {
+          const std::string notes = result_notes(r, e.curve.max_slip_ratio());
           std::cout << fmt::format(
               "  {:<7} B {:>8.3f} C {:>6.4f} D {:>8.1f} E {:>8.4f}  MAPE {:>6.2f} %  RMSE {:>7.1f} "
               "N{}\n",
               to_string(r.method), r.params.B, r.params.C, r.params.D, r.params.E,
-              r.metrics.mape_pct, r.metrics.rmse_n,
-              r.peak_reached ? "" : "  (peak beyond the data)");
+              r.metrics.mape_pct, r.metrics.rmse_n, notes.empty() ? "" : "  (" + notes + ")");
+        }
       }
       if (!o->json && run.events.empty()) std::cout << run.path << ": no brake event found\n";
     }

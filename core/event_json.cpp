@@ -26,9 +26,19 @@ nlohmann::ordered_json result_json(const MethodResult& r) {
   j["peak_force_n"] = num(pk.force_n);
   j["peak_slip_ratio"] = num(pk.slip_ratio);
   j["peak_reached"] = r.peak_reached;
+  // The curve's own maximum over [0, 1]: "beyond the data" only when it lies past the data.
+  const MfPeak whole = mf_peak(r.params, 1.0);
+  j["peak_beyond_data"] = !r.peak_reached && whole.interior;
+  j["at_bound"] = r.at_bound;
   if (r.stderr_) {
     const auto& s = *r.stderr_;
     j["stderr"] = {{"B", num(s[0])}, {"C", num(s[1])}, {"D", num(s[2])}, {"E", num(s[3])}};
+    nlohmann::ordered_json why = nlohmann::ordered_json::object();
+    const char* names[4] = {"B", "C", "D", "E"};
+    for (std::size_t k = 0; k < 4; ++k)
+      if (!std::isfinite(s[k]) && !r.stderr_null_reason[k].empty())
+        why[names[k]] = r.stderr_null_reason[k];
+    j["stderr_null_reason"] = why;
     j["converged"] = r.converged;
     j["iterations"] = r.iterations;
   } else {
@@ -36,6 +46,16 @@ nlohmann::ordered_json result_json(const MethodResult& r) {
   }
   if (r.bmu) j["bmu"] = *r.bmu;
   return j;
+}
+
+std::string result_notes(const MethodResult& r, double data_slip_max) {
+  std::string out;
+  for (const auto& b : r.at_bound) out += (out.empty() ? "" : ", ") + b;
+  if (!out.empty()) out += " at bound";
+  const MfPeak whole = mf_peak(r.params, 1.0);
+  if (!r.peak_reached && whole.interior && whole.slip_ratio > data_slip_max)
+    out += (out.empty() ? "" : "; ") + std::string("peak beyond the data");
+  return out;
 }
 
 nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::string& file,

@@ -115,6 +115,8 @@ MethodResult run_method(Method method, const Model* model, const Curve& c,
       const fit::MfFitResult f = fit::fit_mf(c, fit::classic_start(c), options);
       r.params = f.params;
       r.stderr_ = f.stderr_;
+      r.at_bound = f.at_bound;
+      r.stderr_null_reason = f.stderr_null_reason;
       r.iterations = f.iterations;
       r.converged = f.converged;
       break;
@@ -129,6 +131,8 @@ MethodResult run_method(Method method, const Model* model, const Curve& c,
       if (from_mlp.ssr < best.ssr) best = from_mlp;
       r.params = best.params;
       r.stderr_ = best.stderr_;
+      r.at_bound = best.at_bound;
+      r.stderr_null_reason = best.stderr_null_reason;
       r.iterations = best.iterations;
       r.converged = best.converged;
       r.bmu = e.bmu;

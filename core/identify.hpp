@@ -41,6 +41,8 @@ struct MethodResult {
   bool peak_reached = false;
   std::optional<std::array<double, kMfParamCount>> stderr_;  ///< only for least-squares methods
   std::optional<std::size_t> bmu;                            ///< SOM unit used (som, hybrid)
+  std::vector<std::string> at_bound;  ///< least squares: parameters that ended on a bound
+  std::array<std::string, kMfParamCount> stderr_null_reason{};  ///< why a stderr is null
   int iterations = 0;
   bool converged = true;
 };

@@ -45,6 +45,11 @@ RegisterWrites event_block(const std::string& result_json, std::int64_t id, bool
   }
   const auto& results = doc.at("results");
   if (results.empty()) flags |= kFlagNotFitted;
+  for (const auto& r : results)
+    if (r.is_object() && r.contains("at_bound") && r["at_bound"].is_array() &&
+        !r["at_bound"].empty() && r.contains("method") &&
+        (r["method"] == "lm" || r["method"] == "hybrid"))
+      flags |= kFlagAtBound;
   if (!samples_stored) flags |= kFlagSamplesNotStored;
   const std::uint16_t seq = event_seq(id);
   const auto t_start_ns = doc.at("t_start_ns").get<std::int64_t>();

@@ -65,7 +65,9 @@ std::vector<RegisterDef> build_map() {
       {"event.bench", T::Input, 103, 1, Y::U16, "", "0 roller, 1 ground"},
       {"event.flags", T::Input, 104, 1, Y::U16, "bits",
        "0 too short, 1 aborted, 2 sensor fault, 3 not fitted, 4 samples not stored, 5 edges lost "
-       "(GPIO edges dropped or illegal transitions during the event; still fitted)"},
+       "(GPIO edges dropped or illegal transitions during the event; still fitted), 6 a "
+       "least-squares "
+       "parameter (lm or hybrid) at its bound: set by the bound, not the data (JSON at_bound)"},
       {"event.end_reason", T::Input, 105, 1, Y::U16, "",
        "1 switch_off_slip, 2 wheel_lock, 3 release, 4 stopped, 5 sensor_timeout, 6 end_of_data, 7 "
        "tester_aborted, 8 operator_abort, 9 shutdown, 0 other"},

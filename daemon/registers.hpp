@@ -50,6 +50,7 @@ enum EventFlagBit : std::uint16_t {
   kFlagNotFitted = 1u << 3,
   kFlagSamplesNotStored = 1u << 4,
   kFlagEdgesLost = 1u << 5,  ///< the GPIO reader lost edges during the event (still fitted)
+  kFlagAtBound = 1u << 6,    ///< an lm or hybrid parameter ended on its bound (JSON at_bound)
 };
 /// End reasons (input register "event.end_reason").
 std::uint16_t end_reason_code(const std::string& reason);

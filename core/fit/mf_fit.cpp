@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
 namespace brakefit::fit {
 
 namespace {
@@ -75,6 +77,17 @@ MfFitResult fit_mf(const Curve& c, const MfParams& start, const MfFitOptions& o)
   out.converged = lm.converged;
   out.status = lm.status;
   out.peak_reached = peak_reached(out.params, c.max_slip_ratio());
+  static constexpr std::array<const char*, kMfParamCount> kNames{"B", "C", "D", "E", "SHx", "SVx"};
+  for (Eigen::Index k = 0; k < np; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const bool at = i < lm.at_bound.size() && lm.at_bound[i];
+    if (at) out.at_bound.push_back(kNames[i]);
+    if (std::isnan(out.stderr_[i]))
+      out.stderr_null_reason[i] =
+          at ? fmt::format("{} ended at its bound {:.6g}: the bound, not the data, set it",
+                           kNames[i], lm.x(k))
+             : "not identifiable from these data (the fit's curvature matrix is singular)";
+  }
   return out;
 }
 

@@ -3,6 +3,8 @@
 // and a flag for curves whose force peak lies beyond the data (e.g. a roller test switched off at
 // 27 % slip before the peak).
 #include <array>
+#include <string>
+#include <vector>
 
 #include "core/curve.hpp"
 #include "core/fit/lm.hpp"
@@ -34,6 +36,11 @@ struct MfFitResult {
   bool converged = false;
   LmStatus status = LmStatus::MaxIterations;
   bool peak_reached = false;  ///< the fitted curve's maximum lies inside the data's slip range
+  /// Parameters the fit ended on a bound of (names: B, C, D, E, SHx, SVx): the data did not
+  /// determine them; the bound did. They have no standard error.
+  std::vector<std::string> at_bound;
+  /// Why a standard error is NaN (empty where there is one): at a bound, or not identifiable.
+  std::array<std::string, kMfParamCount> stderr_null_reason{};
 };
 
 /// The classic fixed start: B = 10, C = 1.5, D = max force, E = 0.

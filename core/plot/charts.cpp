@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "core/event_json.hpp"
 #include "core/plot/svg.hpp"
 
 namespace brakefit::plot {
@@ -19,7 +20,9 @@ std::string fit_chart_svg(const std::string& title, const Curve& measured,
   const double smax = measured.max_slip_ratio();
   for (std::size_t i = 0; i < results.size(); ++i) {
     const auto& r = results[i];
-    Series s{fmt::format("{} (MAPE {:.2f} %)", to_string(r.method), r.metrics.mape_pct),
+    const std::string notes = result_notes(r, measured.max_slip_ratio());
+    Series s{fmt::format("{} (MAPE {:.2f} %{})", to_string(r.method), r.metrics.mape_pct,
+                         notes.empty() ? "" : "; " + notes),
              {},
              {},
              false,

@@ -387,3 +387,34 @@ class ReadmeTour(unittest.TestCase):
         # The PATH line names the directories the build writes the binaries to.
         self.assertIn("build/release/cli", path_line[0])
 
+
+class FitsAtABound(unittest.TestCase):
+    """A parameter the bound set, not the data, is named; "peak beyond the data" only when so."""
+
+    def test_bounds_are_named_with_the_reason_for_a_null_standard_error(self):
+        for log, param in (("roller_1p0bar_medium", "E"), ("ground_1p0bar_150barps", "C")):
+            r = run("replay", "--json", "--method", "hybrid", os.path.join(REC, log + ".log"))
+            self.assertEqual(r.returncode, 0, r.stderr)
+            res = json.loads(r.stdout.splitlines()[0])["results"][0]
+            self.assertEqual(res["at_bound"], [param], log)
+            self.assertIsNone(res["stderr"][param])
+            self.assertIn("bound", res["stderr_null_reason"][param])
+            self.assertFalse(res["peak_beyond_data"], log)
+            table = run("replay", "--method", "hybrid", os.path.join(REC, log + ".log")).stdout
+            self.assertIn(f"({param} at bound)", table)
+            self.assertNotIn("peak beyond the data", table)
+        with tempfile.TemporaryDirectory() as d:
+            # Data that stop at 4 % slip, before the peak (about 10 %): said, with no bound.
+            csv = os.path.join(d, "early.csv")
+            r = run("synth", "--B", "15", "--C", "1.6", "--D", "4000", "--E", "0.3",
+                    "--slip-max", "0.04", "--out", csv)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            svg = os.path.join(d, "p.svg")
+            r = run("fit", "--json", "--method", "lm", "--plot", svg, csv)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            res = json.loads(r.stdout)["results"][0]
+            self.assertTrue(res["peak_beyond_data"])
+            self.assertFalse(res["peak_reached"])
+            _, series = svg_series(svg)
+            self.assertTrue(any("peak beyond the data" in s for s in series), series)
+

@@ -307,6 +307,23 @@ TEST(EventBlock, IsBuiltFromTheStoredDocumentAndSeqFollowsTheRowId) {
   const auto b = reg("event.lm.B").address;
   EXPECT_TRUE(std::isnan(unpack_f32_abcd(regs[b], regs[b + 1])));
   EXPECT_THROW(event_block("{\"schema\":\"other\"}", 1, true), std::exception);
+  // A least-squares parameter at its bound raises bit 6; the same on a SOM result does not.
+  auto e2 = make_event(6, 100);
+  MethodResult lm;
+  lm.method = Method::Lm;
+  lm.params = {10, 0.3, 5000, -4, 0, 0};
+  lm.at_bound = {"C"};
+  MethodResult som = lm;
+  som.method = Method::Som;
+  e2.results = {som};
+  auto flags_of = [&](const pipeline::EventResult& ev) {
+    const RegisterWrites w2 = event_block(event_json(ev, "test", nullptr).dump(), 2, true);
+    std::map<std::uint16_t, std::uint16_t> r(w2.input.begin(), w2.input.end());
+    return r[reg("event.flags").address];
+  };
+  EXPECT_EQ(flags_of(e2) & kFlagAtBound, 0);
+  e2.results = {som, lm};
+  EXPECT_EQ(flags_of(e2) & kFlagAtBound, kFlagAtBound);
 }
 
 TEST(ModbusGate, CutsRequestsAndAnswersWhatLibmodbusWouldSleepOn) {
