@@ -49,6 +49,28 @@ void set_log_level(const std::string& l) {
   spdlog::set_level(spdlog::level::from_str(l));
 }
 
+/// A replayed log's own calibration (<stem>.bench.toml beside it) replaces [bench]: the log was
+/// recorded on that bench. Logged either way, so nobody wonders which gain made the forces.
+void use_replay_calibration(Config& c, const std::string& config_path) {
+  if (c.kind != SourceKind::Replay) return;
+  std::string stem = c.replay_file;
+  if (stem.size() > 4 && stem.compare(stem.size() - 4, 4, ".log") == 0)
+    stem.resize(stem.size() - 4);
+  const std::string bench = stem + ".bench.toml";
+  if (::access(bench.c_str(), R_OK) != 0) {
+    spdlog::info("replay: calibration from [bench] in {} (no {} beside the log)", config_path,
+                 bench);
+    return;
+  }
+  try {
+    c.calibration = pipeline::parse_calibration(read_text_file(bench), bench);
+  } catch (const std::exception& e) {
+    throw DaemonError(kExitConfig, fmt::format("source: {}", e.what()));
+  }
+  spdlog::info("replay: calibration from {} (the log's own; [bench] in {} not used)", bench,
+               config_path);
+}
+
 std::vector<std::uint32_t> layout_ids() {
   std::vector<std::uint32_t> ids;
   for (const auto& m : can::layout()) ids.push_back(m.id);
@@ -107,6 +129,7 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
       throw DaemonError(kExitCantCreate, e.what());
     }
   }
+  use_replay_calibration(cfg_, config_path_);
   pipeline_ = std::make_unique<pipeline::Pipeline>(cfg_.calibration, cfg_.pipeline, model_.get());
   pending_ = std::make_unique<PendingEvents>(cfg_.store.path + ".spill",
                                              static_cast<std::size_t>(cfg_.store.hold_in_memory),
@@ -186,7 +209,8 @@ void Daemon::post_status(Clock::time_point now) {
   w.u32("store_failures", static_cast<std::uint32_t>(store_failures_));
   w.u32("events_lost", static_cast<std::uint32_t>(pending_->lost()));
   const double nan = std::nan("");
-  const auto& s = pipeline_->last_sample();
+  // After a replay ends nothing is live: the last sample is history, not a reading.
+  const auto& s = source_finished_ ? std::optional<pipeline::Sample>() : pipeline_->last_sample();
   w.f32("v_ref_mps", s ? s->v_ref_mps : nan);
   w.f32("v_wheel_mps", s ? s->v_wheel_mps : nan);
   w.f32("slip_ratio", s ? pipeline::slip_ratio(*s) : nan);
@@ -304,6 +328,7 @@ void Daemon::reload() {
     next.store.path = cfg_.store.path;
     // Everything new is built aside; nothing running is touched until all of it has loaded.
     // The model is re-read even when its path is unchanged: a retrained file may sit there.
+    use_replay_calibration(next, config_path_);
     auto next_model = load_model(next.model_path);
     auto next_pipeline =
         std::make_unique<pipeline::Pipeline>(next.calibration, next.pipeline, next_model.get());

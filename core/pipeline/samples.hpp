@@ -35,9 +35,13 @@ class EncoderSpeed {
   /// Times the sender's edge clock went backwards while counts moved (a bench controller that
   /// restarted): the new count and edge time became the reference.
   std::size_t resyncs() const { return resyncs_; }
+  /// Frames whose last edge came less than kMinSpanUs after the previous one: not used alone.
+  std::size_t short_spans() const { return short_spans_; }
+  static constexpr std::int64_t kMinSpanUs = 200;
 
  private:
   double m_per_count_;
+  std::size_t short_spans_ = 0;
   bool init_ = false;
   std::size_t resyncs_ = 0;
   std::uint32_t last_count_ = 0, last_edge_us_ = 0;

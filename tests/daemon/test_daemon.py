@@ -4,6 +4,7 @@ and mbpoll clients, sd_notify READY/RELOADING/WATCHDOG/STOPPING on our own NOTIF
 errors, absent sources, faults (sensor timeout mid-event, malformed requests, 100 clients,
 kill -9 during an event), the systemd unit and cmake --install."""
 import json
+import math
 import os
 import re
 import shutil
@@ -272,6 +273,31 @@ class DaemonTest(unittest.TestCase):
         self.assertEqual(d.probe()["registers"]["events_finished"], 1)
         self.assertEqual(d.stop(), 0)
         notify.wait_for("STOPPING=1")
+
+    def test_replay_takes_the_logs_calibration_and_goes_quiet_at_the_end(self):
+        # The log's own .bench.toml (gain 100 N/bar) beats [bench] in the config (66.7): the
+        # daemon says which it used and publishes what brakefit replay computes with it.
+        log = os.path.join(self.tmp, "own.log")
+        shutil.copy(os.path.join(REC, "roller_2p2bar_fast.log"), log)
+        with open(os.path.join(self.tmp, "own.bench.toml"), "w") as f:
+            f.write(re.sub(r"brake_gain_n_per_bar = .*", "brake_gain_n_per_bar = 100", BENCH))
+        ref = replay_reference(log)
+        d = self.start(log, speed=0.0)
+        p = d.wait_events(1)
+        self.assertIn("calibration from " + os.path.join(self.tmp, "own.bench.toml"), d.log())
+        hyb = next(r for r in ref[0]["results"] if r["method"] == "hybrid")
+        self.assertEqual(p["registers"]["event.hybrid.D"], f32(hyb["D"]))
+        # The replay has ended: the live registers hold no stale reading, status bit 1 says so.
+        end = time.time() + 10
+        while time.time() < end:
+            r = d.probe()["registers"]
+            if r["status_flags"] & 2:
+                break
+            time.sleep(0.1)
+        self.assertTrue(r["status_flags"] & 2)
+        for k in ("v_ref_mps", "v_wheel_mps", "slip_ratio", "pressure_bar"):
+            self.assertTrue(r[k] is None or math.isnan(r[k]), f"{k} = {r[k]} after the replay ended")
+        self.assertEqual(d.stop(), 0)
 
     def run_daemon(self, config_text):
         path = os.path.join(self.tmp, "bad.toml")

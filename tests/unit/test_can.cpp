@@ -242,3 +242,22 @@ TEST(EncoderSpeed, AnEdgeClockThatGoesBackIsAResyncNotAnHourOfZeroSpeed) {
   EXPECT_EQ(sp.resyncs(), 1u);
   EXPECT_NEAR(step(7, 1000), 7 * m_per_count / 1e-3, 1e-9);  // the next frame has the speed
 }
+
+TEST(EncoderSpeed, EdgesCloserThanAFrameCanResolveHoldTheSpeedUntilTheNextFrame) {
+  // The daemon once read 183 m/s: a frame 2.6 us after the one before, one count between them.
+  brakefit::pipeline::EncoderSpeed sp(1000, 0.3);
+  const double m_per_count = 2.0 * M_PI * 0.3 / 4000.0;
+  EncoderMsg m{Channel::Wheel, 0, 1'000'000, 0};
+  std::int64_t t_ns = 0;
+  auto step = [&](std::uint32_t counts, std::uint32_t dt_us) {
+    m.count_x4_mod = (m.count_x4_mod + counts) & 0xFFFFFFu;
+    m.edge_time_us += dt_us;
+    t_ns += dt_us * 1000LL;
+    return sp.update(m, t_ns);
+  };
+  for (int i = 0; i < 5; ++i) step(3, 1000);
+  const double v = 3 * m_per_count / 1e-3;
+  EXPECT_NEAR(step(1, 3), v, 1e-9);  // held, not 1 count / 3 us = 157 m/s
+  EXPECT_EQ(sp.short_spans(), 1u);
+  EXPECT_NEAR(step(3, 997), 4 * m_per_count / 1e-3, 1e-9);  // the next frame spans both
+}
