@@ -61,6 +61,8 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
     x["gain"] = num(e.gain);
     x["delta_bic"] = num(e.delta_bic);
     x["accepted"] = e.accepted;
+    x["stage"] = e.round == 0 ? "alone" : fmt::format("forward selection round {}", e.round + 1);
+    x["decision"] = e.decision;
     j["effects"].push_back(x);
   }
   j["where"] = nlohmann::ordered_json::array();
@@ -128,16 +130,22 @@ void write_report(const std::string& dir, const gap::Report& r, const std::vecto
   write_file(dir + "/curves.svg", plot::render_svg(curves));
   write_file(dir + "/gap.json", doc.dump(2) + "\n");
   std::string rows;
-  for (const auto& e : doc["effects"])
+  for (const auto& e : doc["effects"]) {
+    std::string ps;  // "name = value" per parameter, not raw JSON
+    for (const auto& [k, v] : e["params"].items())
+      ps += fmt::format("{}{} = {}", ps.empty() ? "" : ", ", k,
+                        v.is_number() ? fmt::format("{:.4g}", v.get<double>()) : "n/a");
     rows += fmt::format(
-        "<tr{}><td>{}</td><td>{}</td><td>{:.1f}</td><td>{:.1f}</td><td>{:.3f}</td><td>{}</td>"
-        "<td>{}</td></tr>\n",
+        "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{:.1f}</td><td>{:.1f}</td><td>{:.3f}</td>"
+        "<td>{}</td><td>{}</td></tr>\n",
         e["accepted"].get<bool>() ? " class=\"ok\"" : "", e["name"].get<std::string>(),
-        plot::xml_escape(e["params"].dump()), e["heldout_rmse_before_n"].get<double>(),
-        e["heldout_rmse_after_n"].get<double>(), e["gain"].get<double>(),
+        plot::xml_escape(e["stage"].get<std::string>()), plot::xml_escape(ps),
+        e["heldout_rmse_before_n"].get<double>(), e["heldout_rmse_after_n"].get<double>(),
+        e["gain"].get<double>(),
         e["delta_bic"].is_number() ? fmt::format("{:.1f}", e["delta_bic"].get<double>())
                                    : std::string("(found on the roller runs)"),
-        e["accepted"].get<bool>() ? "yes" : "no");
+        plot::xml_escape(e["decision"].get<std::string>()));
+  }
   std::string where;
   for (const auto& w : r.where)
     where += fmt::format("<tr><td>{}</td><td>{:.1f}</td><td>{:.1f} %</td></tr>\n",
@@ -159,7 +167,7 @@ least {:.3f} and its BIC drops by at least {:.1f} (gates calibrated on null data
 condition).</p>
 <ul>{}</ul>
 <h2>Which effect (each candidate alone on the baseline, then forward selection)</h2>
-<table><tr><th>effect</th><th>parameters</th><th>held-out before [N]</th><th>after [N]</th><th>gain</th><th>ΔBIC</th><th>accepted</th></tr>
+<table><tr><th>effect</th><th>stage</th><th>parameters</th><th>held-out before [N]</th><th>after [N]</th><th>gain</th><th>ΔBIC</th><th>decision</th></tr>
 {}</table>
 <h2>Where the baseline misses</h2>
 <table><tr><th>region</th><th>RMS residual [N]</th><th>share of squared residual</th></tr>
@@ -257,8 +265,14 @@ void add_gap_command(CLI::App& app) {
     std::vector<gap::Run> roller_runs;
     std::vector<gap::Run> runs = transfer ? load(o->road, false) : load(o->files, true);
     if (transfer) roller_runs = load(o->roller, true);
-    spdlog::info("gap: {} runs, seeding the baseline with the hybrid fit of the pooled points",
-                 runs.size());
+    if (transfer)
+      spdlog::info(
+          "gap: {} runs ({} roller, {} road), seeding the baseline with the hybrid fit of "
+          "the pooled roller points",
+          roller_runs.size() + runs.size(), roller_runs.size(), runs.size());
+    else
+      spdlog::info("gap: {} runs, seeding the baseline with the hybrid fit of the pooled points",
+                   runs.size());
     const MethodResult seed = run_method(Method::Hybrid, &model, pooled, fit_options_for(&model));
     // The gates calibrated on null data of this condition (runs from one bench in mode 1).
     gap::Condition condition = gap::Condition::RollerToRoad;
@@ -300,14 +314,25 @@ void add_gap_command(CLI::App& app) {
         rep.gap_before_rmse_n, rep.gap_after_rmse_n,
         rep.gap_before_rmse_n > 0 ? 100 * (1 - rep.gap_after_rmse_n / rep.gap_before_rmse_n) : 0.0,
         rep.noise_n, rep.floor.force_n, rep.floor.slip_sd_ratio, rep.floor.slip_n);
-    for (const auto& e : rep.effects) {
-      std::string ps;
-      for (const auto& [k, v] : e.params) ps += fmt::format("{} {:.4g} ", k, v);
-      const std::string bic = std::isfinite(e.delta_bic) ? fmt::format("{:>8.1f}", e.delta_bic)
-                                                         : std::string("     n/a");
-      std::cout << fmt::format("  {:<18} {:<32} gain {:>6.3f}  dBIC {}  {}\n",
-                               gap::to_string(e.effect), ps, e.gain, bic,
-                               e.accepted ? "accepted" : "");
+    for (int stage = 0; stage < 2; ++stage) {
+      bool header = false;
+      for (const auto& e : rep.effects) {
+        if ((e.round > 0) != (stage == 1)) continue;
+        if (!header) {
+          std::cout << (stage == 0 ? "each effect alone against the baseline:\n"
+                                   : "forward selection (each scored against the model chosen "
+                                     "before it):\n");
+          std::cout << fmt::format("  {:<18} {:<32} {:>9} {:>9}  {}\n", "effect", "parameters",
+                                   "gain", "dBIC", "decision");
+          header = true;
+        }
+        std::string ps;
+        for (const auto& [k, v] : e.params) ps += fmt::format("{} {:.4g} ", k, v);
+        const std::string bic = std::isfinite(e.delta_bic) ? fmt::format("{:>9.1f}", e.delta_bic)
+                                                           : std::string("      n/a");
+        std::cout << fmt::format("  {:<18} {:<32} {:>9.3f} {}  {}\n", gap::to_string(e.effect), ps,
+                                 e.gain, bic, e.decision);
+      }
     }
     for (const auto& n : rep.notes) std::cout << "note: " << n << "\n";
   });

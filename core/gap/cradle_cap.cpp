@@ -71,6 +71,7 @@ void put_cap_first(Report& rep, double cap_n, double gap_whole_n) {
   c.gain = 1.0 - c.heldout_rmse_after_n / std::max(c.heldout_rmse_before_n, 1e-12);
   c.delta_bic = NAN;  // not a fitted model
   c.accepted = true;
+  c.decision = "found from how the runs end (not fitted)";
   rep.effects.insert(rep.effects.begin(), c);
   if (rep.verdict == std::vector<std::string>{"none"}) rep.verdict.clear();
   rep.verdict.insert(rep.verdict.begin(), to_string(Effect::CradleCap));

@@ -70,7 +70,7 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
       candidates.push_back(e);
   select_effects(rep, runs, candidates, fit, o,
                  "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at "
-                 "other speeds or ramp rates would");
+                 "other speeds or ramp rates would tell them apart");
   if (cap) {
     // Found from how the runs end, not fitted: before, the baseline on the whole runs (the
     // runaway at the cap included); after, the baseline on the runs below the cap.

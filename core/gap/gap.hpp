@@ -154,6 +154,10 @@ struct EffectScore {
   double gain = 0.0;
   double delta_bic = 0.0;
   bool accepted = false;
+  /// 0: the effect alone against the baseline (every candidate); k > 0: the one forward
+  /// selection added in its round k+1, scored against the model chosen before it.
+  int round = 0;
+  std::string decision;  ///< why it was or was not accepted, in words
 };
 
 struct WhereRow {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 
 #include "core/gap/gap.hpp"
@@ -174,6 +175,12 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
     return std::vector<Effect>(model.begin() + static_cast<long>(base.size()), model.end());
   };
   std::vector<Effect> chosen = base;
+  auto after_names = [&] {
+    std::string out;
+    for (Effect e : named(chosen)) out += (out.empty() ? "" : ", ") + std::string(to_string(e));
+    return out;
+  };
+  std::map<Effect, EffectScore> latest;  // each candidate's score in the last round it was scored
   double current_heldout = rep.gap_before_rmse_n;
   Fit current_fit = rep.before;
   for (std::size_t round = 0; round < o.max_effects; ++round) {
@@ -207,6 +214,13 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
     // The best candidate past the gates whose parameters all lie inside their physical ranges (a
     // misspecified curve on the ground was taken for load transfer with the stiffness ratio at
     // its end, 3); one at the end of a range is noted and the next one is considered.
+    for (auto& e : scores) {
+      e.round = static_cast<int>(round);
+      if (e.gain < o.gate_gain)
+        e.decision = fmt::format("held-out gain below the gate {:.3f}", o.gate_gain);
+      else if (e.delta_bic > -o.bic_margin)
+        e.decision = fmt::format("BIC drop below the margin {:.1f}", o.bic_margin);
+    }
     std::size_t pick = order.size();
     for (std::size_t k = 0; k < order.size() && pick == order.size(); ++k) {
       EffectScore& e = scores[order[k]];
@@ -217,10 +231,13 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
         const double v = e.params[j].second;
         if (!at_bound(v, eps[j].lo, eps[j].hi)) continue;
         inside = false;
-        rep.notes.push_back(
-            fmt::format("{} would explain part of the residual only with {} at the "
-                        "end of its physical range ({:.4g}): not accepted",
-                        to_string(e.effect), eps[j].name, v));
+        rep.notes.push_back(fmt::format(
+            "{}{} would explain part of the residual only with {} at the end of its physical "
+            "range ({:.4g}): not accepted",
+            to_string(e.effect),
+            round == 0 ? "" : fmt::format(" (round {}, after {})", round + 1, after_names()),
+            eps[j].name, v));
+        e.decision = fmt::format("{} at the end of its physical range ({:.4g})", eps[j].name, v);
       }
       // A slip offset no larger than the reference's resolution leaves (half a quantisation
       // step of a constant reference, on average over the runs) is that resolution, not an
@@ -231,8 +248,26 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
             "slip_offset {:.2g} is within the reference speed's resolution ({:.2g}, half a "
             "quantisation step): not accepted",
             e.params[0].second, resolution));
+        e.decision = fmt::format("within the reference speed's resolution ({:.2g})", resolution);
       }
       if (inside) pick = k;
+    }
+    if (pick < order.size()) {
+      const Effect taken = scores[order[pick]].effect;
+      scores[order[pick]].decision =
+          round == 0 ? "accepted (round 1: the largest gain past the gates)"
+                     : fmt::format("accepted (round {}: the largest further gain)", round + 1);
+      for (auto& e : scores)
+        if (e.decision.empty())
+          e.decision =
+              fmt::format("passed the gates, but {} gained more in this round{}", to_string(taken),
+                          round == 0 ? " (forward selection re-scores the rest below)" : "");
+    } else {
+      for (auto& e : scores)
+        if (e.decision.empty())
+          e.decision =
+              "passed the gates, but a candidate with more gain failed them: none was "
+              "taken in this round";
     }
     if (pick < order.size()) {
       EffectScore& best = scores[order[pick]];
@@ -246,12 +281,24 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
       }
     }
     if (round == 0) rep.effects = scores;
+    for (const auto& e : scores) latest[e.effect] = e;
     if (pick == order.size()) break;
     const EffectScore& best = scores[order[pick]];
     if (round > 0) rep.effects.push_back(best);
     chosen.push_back(best.effect);
     current_heldout = best.heldout_rmse_after_n;
     current_fit = fits[order[pick]];
+  }
+  // A candidate that passed alone but lost round 1 says what became of it later.
+  for (auto& e : rep.effects) {
+    if (e.round != 0 || e.decision.rfind("passed the gates, but", 0) != 0) continue;
+    const auto it = latest.find(e.effect);
+    if (it == latest.end() || it->second.round == 0) continue;
+    const EffectScore& l = it->second;
+    e.decision = fmt::format(
+        "passed the gates alone; in round {}, after the effects before it, "
+        "gain {:.3f}, dBIC {:.1f}: {}",
+        l.round + 1, l.gain, l.delta_bic, l.decision);
   }
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
@@ -265,7 +312,11 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
         "against {:.1f} N of noise: the residual has a structure no candidate explains (is the "
         "curve a Magic Formula?), so no effect is named",
         to_string(named(chosen).front()), 100 * first, current_heldout, rep.noise_n));
-    for (auto& e : rep.effects) e.accepted = false;
+    for (auto& e : rep.effects) {
+      e.accepted = false;
+      if (e.decision.rfind("accepted", 0) == 0)
+        e.decision = "passed, but vetoed by the fit-quality check (see the notes)";
+    }
     chosen = base;
     current_fit = rep.before;
     current_heldout = rep.gap_before_rmse_n;
