@@ -110,6 +110,11 @@ TEST(ModbusServer, OneAddressIsLimitedAndTheRejectionsAreInARegister) {
   srv.start();
   std::vector<int> fds;
   for (int i = 0; i < 5; ++i) fds.push_back(raw_connect(srv.port(), "127.0.0.1"));
+  // The server refuses the 4th and 5th when its loop accepts them, which can be after it has
+  // answered the first client (a race the test once lost under load): wait for both refusals.
+  for (int i = 0; i < 200 && srv.stats().rejected.load() < 2; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_EQ(srv.stats().rejected.load(), 2u);
   int answered = 0;
   for (int fd : fds) {
     const std::uint8_t req[] = {0, 1, 0, 0, 0, 6, 1, 4, 0, 33, 0, 2};  // modbus_rejected
