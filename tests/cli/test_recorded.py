@@ -350,6 +350,14 @@ class Gap(unittest.TestCase):
         names = {e["name"] for e in doc["effects"]}
         for required in ("load_transfer", "speed_friction", "roller_friction"):
             self.assertIn(required, names)
+        # Every effect says at which stage it was scored and why it was or was not accepted.
+        for e in doc["effects"]:
+            self.assertTrue(e["stage"] == "alone" or e["stage"].startswith("forward selection"))
+            self.assertTrue(e["decision"], e)
+            self.assertEqual(e["accepted"], e["decision"].startswith(("accepted", "found")), e)
+        table = run("gap", "--roller", *roller, "--road", *road).stdout
+        self.assertIn("each effect alone against the baseline:", table)
+        self.assertRegex(table, r"effect\s+parameters\s+gain\s+dBIC\s+decision")
         # The ground runs were simulated with load transfer and a road 1/0.85 grippier than the
         # rollers: one of those closes most of the gap on withheld road runs.
         self.assertIn(doc["verdict"][0], ("load_transfer", "roller_friction"))

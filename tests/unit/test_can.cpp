@@ -220,44 +220,45 @@ TEST(Dbc, OutOfRangeNumbersAndHugeLinesAreErrorsNamingTheLine) {
   }
 }
 
-// A bench controller that restarts its edge clock (or a log joined to itself): the speed comes
-// back at once instead of reading 0 until the clock catches up (up to 71 minutes).
-TEST(EncoderSpeed, AnEdgeClockThatGoesBackIsAResyncNotAnHourOfZeroSpeed) {
-  brakefit::pipeline::EncoderSpeed sp(1000, 0.1);
-  const double m_per_count = 2.0 * M_PI * 0.1 / 4000.0;
-  EncoderMsg m{Channel::Roller, 0, 5'000'000, 0};
-  std::int64_t t_ns = 0;
-  auto step = [&](std::uint32_t counts, std::uint32_t dt_us) {
+namespace {
+
+/// An encoder's frames one after another: counts and edge clock advanced by each step.
+struct EncoderFrames {
+  EncoderFrames(double radius_m, Channel ch, std::uint32_t edge_us)
+      : sp(1000, radius_m), m_per_count(2.0 * M_PI * radius_m / 4000.0), m{ch, 0, edge_us, 0} {}
+  double step(std::uint32_t counts, std::uint32_t dt_us) {
     m.count_x4_mod = (m.count_x4_mod + counts) & 0xFFFFFFu;
     m.edge_time_us += dt_us;
     t_ns += dt_us * 1000LL;
     return sp.update(m, t_ns);
-  };
-  for (int i = 0; i < 10; ++i) step(14, 1000);
-  EXPECT_NEAR(sp.speed_mps(), 14 * m_per_count / 1e-3, 1e-9);
-  m.edge_time_us = 100;  // the clock restarts; counts jump too
-  m.count_x4_mod = 77;
-  t_ns += 1'000'000;
-  sp.update(m, t_ns);
-  EXPECT_EQ(sp.resyncs(), 1u);
-  EXPECT_NEAR(step(7, 1000), 7 * m_per_count / 1e-3, 1e-9);  // the next frame has the speed
+  }
+  brakefit::pipeline::EncoderSpeed sp;
+  double m_per_count;
+  EncoderMsg m;
+  std::int64_t t_ns = 0;
+};
+
+}  // namespace
+
+// A bench controller that restarts its edge clock (or a log joined to itself): the speed comes
+// back at once instead of reading 0 until the clock catches up (up to 71 minutes).
+TEST(EncoderSpeed, AnEdgeClockThatGoesBackIsAResyncNotAnHourOfZeroSpeed) {
+  EncoderFrames e(0.1, Channel::Roller, 5'000'000);
+  for (int i = 0; i < 10; ++i) e.step(14, 1000);
+  EXPECT_NEAR(e.sp.speed_mps(), 14 * e.m_per_count / 1e-3, 1e-9);
+  e.m.edge_time_us = 100;  // the clock restarts; counts jump too
+  e.m.count_x4_mod = 77;
+  e.t_ns += 1'000'000;
+  e.sp.update(e.m, e.t_ns);
+  EXPECT_EQ(e.sp.resyncs(), 1u);
+  EXPECT_NEAR(e.step(7, 1000), 7 * e.m_per_count / 1e-3, 1e-9);  // the next frame has the speed
 }
 
 TEST(EncoderSpeed, EdgesCloserThanAFrameCanResolveHoldTheSpeedUntilTheNextFrame) {
   // The daemon once read 183 m/s: a frame 2.6 us after the one before, one count between them.
-  brakefit::pipeline::EncoderSpeed sp(1000, 0.3);
-  const double m_per_count = 2.0 * M_PI * 0.3 / 4000.0;
-  EncoderMsg m{Channel::Wheel, 0, 1'000'000, 0};
-  std::int64_t t_ns = 0;
-  auto step = [&](std::uint32_t counts, std::uint32_t dt_us) {
-    m.count_x4_mod = (m.count_x4_mod + counts) & 0xFFFFFFu;
-    m.edge_time_us += dt_us;
-    t_ns += dt_us * 1000LL;
-    return sp.update(m, t_ns);
-  };
-  for (int i = 0; i < 5; ++i) step(3, 1000);
-  const double v = 3 * m_per_count / 1e-3;
-  EXPECT_NEAR(step(1, 3), v, 1e-9);  // held, not 1 count / 3 us = 157 m/s
-  EXPECT_EQ(sp.short_spans(), 1u);
-  EXPECT_NEAR(step(3, 997), 4 * m_per_count / 1e-3, 1e-9);  // the next frame spans both
+  EncoderFrames e(0.3, Channel::Wheel, 1'000'000);
+  for (int i = 0; i < 5; ++i) e.step(3, 1000);
+  EXPECT_NEAR(e.step(1, 3), 3 * e.m_per_count / 1e-3, 1e-9);  // held, not 1 count / 3 us
+  EXPECT_EQ(e.sp.short_spans(), 1u);
+  EXPECT_NEAR(e.step(3, 997), 4 * e.m_per_count / 1e-3, 1e-9);  // the next frame spans both
 }
