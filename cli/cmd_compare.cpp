@@ -191,14 +191,31 @@ void add_compare_command(CLI::App& app) {
         c.series.push_back(std::move(pts));
       }
       for (int i = 0; i < 2; ++i) {
+        // Solid where the side has data, dashed beyond (extrapolated): a roller test stops at
+        // 27 % slip and says nothing about 100 %.
         const Side& s = *sides[i];
-        plot::Series line{fmt::format("{} fit", s.label), {},   {}, false,
-                          i == 0 ? "#1f77b4" : "#d62728", false};
+        double smax = 0;
+        for (const auto& cv : s.curves) smax = std::max(smax, cv.max_slip_ratio());
+        const char* color = i == 0 ? "#1f77b4" : "#d62728";
+        plot::Series line{fmt::format("{} fit", s.label), {}, {}, false, color, false};
+        plot::Series beyond{fmt::format("{} fit beyond its data (> {:.0f} %)", s.label, 100 * smax),
+                            {},
+                            {},
+                            false,
+                            color,
+                            true};
         for (int k = 0; k <= 200; ++k) {
-          line.x.push_back(0.5 * k);
-          line.y.push_back(mf_force_n(s.mean, 0.005 * k));
+          const double x = 0.005 * k;
+          auto& target = x <= smax ? line : beyond;
+          if (x > smax && beyond.x.empty() && !line.x.empty()) {  // join the two pieces
+            beyond.x.push_back(line.x.back());
+            beyond.y.push_back(line.y.back());
+          }
+          target.x.push_back(100 * x);
+          target.y.push_back(mf_force_n(s.mean, x));
         }
         c.series.push_back(std::move(line));
+        if (!beyond.x.empty()) c.series.push_back(std::move(beyond));
       }
       write_file(o->svg, plot::render_svg(c));
       spdlog::info("comparison plot written to {}", o->svg);

@@ -93,15 +93,22 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
 void write_report(const std::string& dir, const gap::Report& r, const std::vector<gap::Run>& runs,
                   const nlohmann::ordered_json& doc) {
   make_output_dir(dir);
+  const bool transfer = doc["mode"] == "roller_vs_road";
   // Residual map: baseline residual against slip, one series per run.
-  plot::XyChart res{"Residual of the 4-parameter fit (measured - model)",
+  plot::XyChart res{transfer ? "Road runs minus the roller's fit (the roller-to-road gap)"
+                             : "Residual of the 4-parameter fit (measured - model)",
                     "slip [%]",
                     "residual [N]",
                     {},
                     800,
                     450};
-  plot::XyChart curves{
-      "Measured runs, baseline and corrected model", "slip [%]", "brake force [N]", {}, 800, 500};
+  plot::XyChart curves{transfer ? "Road runs, the roller's fit and the corrected model"
+                                : "Measured runs, baseline and corrected model",
+                       "slip [%]",
+                       "brake force [N]",
+                       {},
+                       800,
+                       500};
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const auto& run = runs[k];
     const auto before = gap::predict(run, r.before.params, r.baseline_effects);

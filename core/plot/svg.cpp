@@ -87,12 +87,20 @@ std::string render_svg(const XyChart& c) {
   ymax = std::max(ymax * 1.05, yt.back());
   auto X = [&](double v) { return ml + (v - xmin) / (xmax - xmin) * pw; };
   auto Y = [&](double v) { return mt + ph - (v - ymin) / (ymax - ymin) * ph; };
+  // The canvas grows to hold the whole legend (one 20 px row per series, names at about 7 px a
+  // character at 12 px): a gap report's 18 series and long run names were cut off.
+  std::size_t longest = 0;
+  for (const auto& se : c.series) longest = std::max(longest, se.name.size());
+  const int canvas_w =
+      std::max(c.width, static_cast<int>(ml + pw + 45 + 7.0 * static_cast<double>(longest) + 10));
+  const int canvas_h =
+      std::max(c.height, static_cast<int>(mt + 20 + 20 * static_cast<double>(c.series.size())));
   std::string s = fmt::format(
       "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" "
       "width=\"{}\" "
       "height=\"{}\" viewBox=\"0 0 {} {}\" font-family=\"sans-serif\" font-size=\"12\">\n",
-      c.width, c.height, c.width, c.height);
-  s += fmt::format("<rect width=\"{}\" height=\"{}\" fill=\"white\"/>\n", c.width, c.height);
+      canvas_w, canvas_h, canvas_w, canvas_h);
+  s += fmt::format("<rect width=\"{}\" height=\"{}\" fill=\"white\"/>\n", canvas_w, canvas_h);
   s += fmt::format(
       "<text class=\"title\" x=\"{}\" y=\"28\" font-size=\"16\" text-anchor=\"middle\">{}</text>\n",
       ml + pw / 2, xml_escape(c.title));

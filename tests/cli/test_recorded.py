@@ -135,7 +135,15 @@ class ExportAndCompare(unittest.TestCase):
                     self.assertIn(k, doc[side])
             self.assertGreater(doc["b"]["peak_force_n"], doc["a"]["peak_force_n"])
             root, series = svg_series(svg)
-            self.assertEqual(len(series), 4)
+            # Measured points and the fit of each side; past a side's data its fit is dashed
+            # ("beyond its data"): the roller stops at 27 % slip.
+            self.assertEqual(len([n for n in series if "beyond its data" not in n]), 4, series)
+            beyond = [g for g in root.iter("{http://www.w3.org/2000/svg}g")
+                      if g.get("class") == "series" and "beyond its data" in g.get("data-name")]
+            self.assertTrue(beyond, series)
+            for g in beyond:
+                self.assertIsNotNone(next(g.iter("{http://www.w3.org/2000/svg}polyline"))
+                                     .get("stroke-dasharray"))
             texts = {t.get("class"): "".join(t.itertext()) for t in root.iter("{http://www.w3.org/2000/svg}text")
                      if t.get("class")}
             self.assertEqual(texts["x-label"], "slip [%]")

@@ -31,3 +31,21 @@ TEST(Svg, FitChartHasAxesWithUnitsLegendAndOneGroupPerSeries) {
   EXPECT_NE(svg.find("class=\"legend\""), std::string::npos);
   EXPECT_NE(svg.find("t &lt;1&gt;"), std::string::npos);
 }
+
+TEST(Svg, TheCanvasGrowsToHoldEveryLegendEntry) {
+  // A gap report: 18 series with long run names used to be cut at the 800 x 500 canvas.
+  XyChart c{"t", "slip [%]", "brake force [N]", {}, 800, 500};
+  for (int i = 0; i < 30; ++i)
+    c.series.push_back({"roller_2p2bar_medium#" + std::to_string(i) + " corrected model",
+                        {0.0, 1.0},
+                        {0.0, 1.0},
+                        false,
+                        "#000000",
+                        false});
+  const std::string svg = render_svg(c);
+  // 30 rows of 20 px below the 50 px title band need 670 px; the longest name (39 characters at
+  // about 7 px) starts 45 px right of the 490 px plot that begins at 80 px: 898 px.
+  EXPECT_NE(svg.find("width=\"898\" height=\"670\""), std::string::npos) << svg.substr(0, 200);
+  XyChart small{"t", "x [1]", "y [1]", {{"a", {0.0}, {0.0}, true, "#000000", false}}, 800, 500};
+  EXPECT_NE(render_svg(small).find("width=\"800\" height=\"500\""), std::string::npos);
+}
