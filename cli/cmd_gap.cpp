@@ -4,7 +4,9 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 
@@ -153,10 +155,24 @@ void write_report(const std::string& dir, const gap::Report& r, const std::vecto
                                    : std::string("(found on the roller runs)"),
         plot::xml_escape(e["decision"].get<std::string>()));
   }
+  // The same residual cut three ways (slip region, phase of the stop, run): one group each, so
+  // each group's shares sum to 100 % (in one list they summed to 300 %).
   std::string where;
-  for (const auto& w : r.where)
-    where += fmt::format("<tr><td>{}</td><td>{:.1f}</td><td>{:.1f} %</td></tr>\n",
-                         plot::xml_escape(w.region), w.rms_residual_n, 100 * w.share);
+  const std::array<std::pair<const char*, const char*>, 3> groups{
+      {{"", "by slip region"}, {"phase:", "by phase of the stop"}, {"run:", "by run"}}};
+  for (const auto& [prefix, title] : groups) {
+    std::string rows_of_group;
+    for (const auto& w : r.where) {
+      const bool in =
+          *prefix ? w.region.rfind(prefix, 0) == 0 : w.region.find(':') == std::string::npos;
+      if (!in) continue;
+      rows_of_group += fmt::format("<tr><td>{}</td><td>{:.1f}</td><td>{:.1f} %</td></tr>\n",
+                                   plot::xml_escape(w.region.substr(std::strlen(prefix))),
+                                   w.rms_residual_n, 100 * w.share);
+    }
+    if (!rows_of_group.empty())
+      where += fmt::format("<tr><th colspan=\"3\">{}</th></tr>\n{}", title, rows_of_group);
+  }
   std::string notes;
   for (const auto& n : r.notes) notes += "<li>" + plot::xml_escape(n) + "</li>\n";
   const std::string html = fmt::format(
@@ -177,7 +193,7 @@ condition).</p>
 <table><tr><th>effect</th><th>stage</th><th>parameters</th><th>held-out before [N]</th><th>after [N]</th><th>gain</th><th>ΔBIC</th><th>decision</th></tr>
 {}</table>
 <h2>Where the baseline misses</h2>
-<table><tr><th>region</th><th>RMS residual [N]</th><th>share of squared residual</th></tr>
+<table><tr><th>region</th><th>RMS residual [N]</th><th>share of the squared residual (each group sums to 100 %)</th></tr>
 {}</table>
 <h2>Residual map</h2><img src="residual.svg" alt="residual map">
 <h2>Before and after</h2><img src="curves.svg" alt="curves">

@@ -303,8 +303,15 @@ class Gap(unittest.TestCase):
             self.assertGreaterEqual(doc["gates"]["gain"], 0.1)
             self.assertLess(doc["gap_after_rmse_n"], 1.5 * doc["noise_n"])
             with open(os.path.join(d, "index.html")) as f:
-                self.assertIn("Condition <b>roller</b>", f.read())
-            self.assertAlmostEqual(sum(w["share"] for w in doc["where"] if not ":" in w["region"]), 1.0, 6)
+                html = f.read()
+            self.assertIn("Condition <b>roller</b>", html)
+            # The residual is cut three ways; each cut is its own group summing to 100 %.
+            for prefix, title in (("", "by slip region"), ("phase:", "by phase of the stop"),
+                                  ("run:", "by run")):
+                group = [w for w in doc["where"] if (w["region"].startswith(prefix) if prefix
+                                                     else ":" not in w["region"])]
+                self.assertAlmostEqual(sum(w["share"] for w in group), 1.0, 6, prefix)
+                self.assertIn(f"<th colspan=\"3\">{title}</th>", html)
             for f in ("index.html", "residual.svg", "curves.svg", "gap.json"):
                 self.assertTrue(os.path.exists(os.path.join(d, f)), f)
             self.assertEqual(len(svg_series(os.path.join(d, "residual.svg"))[1]), 3)
