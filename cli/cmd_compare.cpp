@@ -52,7 +52,6 @@ Side load_side(const std::vector<std::string>& paths, const std::string& label,
     if (files.empty()) throw InputError(p + ": no .log or .csv runs in this directory");
     s.files.insert(s.files.end(), files.begin(), files.end());
   }
-  const std::string path = label;
   for (const auto& f : s.files) {
     Run run = process_run(f, ro, &model);
     leave_out_if_empty(s.left_out, run);
@@ -66,7 +65,7 @@ Side load_side(const std::vector<std::string>& paths, const std::string& label,
     }
   }
   if (s.fits.empty())
-    throw InputError(fmt::format("{}: no fitted brake event ({} left out, see the warnings)", path,
+    throw InputError(fmt::format("{}: no fitted brake event ({} left out, see the warnings)", label,
                                  s.left_out.size()));
   // One fit to the pooled points: averaging nonlinear parameters of poorly identified fits would
   // give a curve that goes through none of the data.
