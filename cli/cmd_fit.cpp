@@ -111,7 +111,7 @@ void add_fit_command(CLI::App& app) {
                                "RMSE N", "peak N", pct ? "peak %" : "peak [-]", "notes");
       for (const auto& r : all[i]) {
         const MfPeak pk = mf_peak(r.params, 1.0);
-        const std::string notes = result_notes(r, c.max_slip_ratio());
+        const std::string notes = result_notes(r);
         std::cout << fmt::format(
             "  {:<7} {:>10.4f} {:>7.4f} {:>9.1f} {:>8.4f} {:>8.3f} {:>8.2f} {:>9.1f} {:>9.4f}  "
             "{}\n",

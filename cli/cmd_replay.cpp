@@ -88,7 +88,7 @@ void add_replay_command(CLI::App& app) {
             e.event.flags.empty() ? ""
                                   : fmt::format(" [flags: {}]", fmt::join(e.event.flags, ", ")));
         for (const auto& r : e.results) {
-          const std::string notes = result_notes(r, e.curve.max_slip_ratio());
+          const std::string notes = result_notes(r);
           std::cout << fmt::format(
               "  {:<7} B {:>8.3f} C {:>6.4f} D {:>8.1f} E {:>8.4f}  MAPE {:>6.2f} %  RMSE {:>7.1f} "
               "N{}\n",

@@ -66,11 +66,6 @@ Model load_model(const std::string& path) {
   }
 }
 
-std::string recording_stem(const std::string& log_path) {
-  const std::filesystem::path p(log_path);
-  return (p.parent_path() / p.stem()).string();
-}
-
 void log_progress(const std::string& stage, std::size_t done, std::size_t total, double loss) {
   const std::size_t step = std::max<std::size_t>(1, total / 10);
   if (done % step != 0 && done != total) return;

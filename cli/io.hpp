@@ -5,6 +5,7 @@
 
 #include "core/exit_codes.hpp"
 #include "core/identify.hpp"
+#include "core/pipeline/calibration.hpp"
 
 namespace brakefit::cli {
 
@@ -23,9 +24,7 @@ void make_output_dir(const std::string& dir);
 /// The model given, else $BRAKEFIT_MODEL, else the default model shipped in data/models/.
 std::string resolve_model_path(const std::string& given);
 Model load_model(const std::string& path);
-/// "dir/name.log" -> "dir/name" (a recording's sidecars are <stem>.bench.toml and
-/// <stem>.truth.json).
-std::string recording_stem(const std::string& log_path);
+using pipeline::recording_stem;
 /// Logs a stage's progress at most every 10 %.
 void log_progress(const std::string& stage, std::size_t done, std::size_t total, double loss);
 

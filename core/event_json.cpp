@@ -7,6 +7,15 @@
 
 namespace brakefit {
 
+namespace {
+
+/// The one rule: not reached in the data, and the curve's maximum over [0, 1] is interior.
+bool beyond(bool peak_reached, const MfPeak& whole) {
+  return !peak_reached && whole.interior;
+}
+
+}  // namespace
+
 nlohmann::ordered_json num(double v) {
   return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
 }
@@ -26,9 +35,7 @@ nlohmann::ordered_json result_json(const MethodResult& r) {
   j["peak_force_n"] = num(pk.force_n);
   j["peak_slip_ratio"] = num(pk.slip_ratio);
   j["peak_reached"] = r.peak_reached;
-  // The curve's own maximum over [0, 1]: "beyond the data" only when it lies past the data.
-  const MfPeak whole = mf_peak(r.params, 1.0);
-  j["peak_beyond_data"] = !r.peak_reached && whole.interior;
+  j["peak_beyond_data"] = beyond(r.peak_reached, pk);
   j["at_bound"] = r.at_bound;
   if (r.stderr_) {
     const auto& s = *r.stderr_;
@@ -48,13 +55,15 @@ nlohmann::ordered_json result_json(const MethodResult& r) {
   return j;
 }
 
-std::string result_notes(const MethodResult& r, double data_slip_max) {
+bool peak_beyond_data(const MethodResult& r) {
+  return beyond(r.peak_reached, mf_peak(r.params, 1.0));
+}
+
+std::string result_notes(const MethodResult& r) {
   std::string out;
   for (const auto& b : r.at_bound) out += (out.empty() ? "" : ", ") + b;
   if (!out.empty()) out += " at bound";
-  const MfPeak whole = mf_peak(r.params, 1.0);
-  if (!r.peak_reached && whole.interior && whole.slip_ratio > data_slip_max)
-    out += (out.empty() ? "" : "; ") + std::string("peak beyond the data");
+  if (peak_beyond_data(r)) out += (out.empty() ? "" : "; ") + std::string("peak beyond the data");
   return out;
 }
 

@@ -10,10 +10,12 @@ namespace brakefit {
 nlohmann::ordered_json num(double v);
 /// One entry of "results": method, B, C, D, E, metrics, stderr or null.
 nlohmann::ordered_json result_json(const MethodResult& r);
+/// The fitted curve peaks past the data's slip range but below 100 % slip (not reached in the
+/// data, and an interior maximum on [0, 1]); a curve still rising at 100 % has no peak to place.
+bool peak_beyond_data(const MethodResult& r);
 /// What a table or a legend must say beside a fit: "C at bound" for parameters that ended on a
-/// bound, "peak beyond the data" only when the curve's maximum lies past the data's slip range.
-/// Empty when there is nothing to say.
-std::string result_notes(const MethodResult& r, double data_slip_max);
+/// bound, "peak beyond the data" when peak_beyond_data. Empty when there is nothing to say.
+std::string result_notes(const MethodResult& r);
 /// {"schema":"brakefit.event/1", "version", "model_hash", "file", "event_id", "bench", ...}.
 nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::string& file,
                                   const Model* model);

@@ -53,10 +53,7 @@ void set_log_level(const std::string& l) {
 /// recorded on that bench. Logged either way, so nobody wonders which gain made the forces.
 void use_replay_calibration(Config& c, const std::string& config_path) {
   if (c.kind != SourceKind::Replay) return;
-  std::string stem = c.replay_file;
-  if (stem.size() > 4 && stem.compare(stem.size() - 4, 4, ".log") == 0)
-    stem.resize(stem.size() - 4);
-  const std::string bench = stem + ".bench.toml";
+  const std::string bench = pipeline::recording_stem(c.replay_file) + ".bench.toml";
   if (::access(bench.c_str(), R_OK) != 0) {
     spdlog::info("replay: calibration from [bench] in {} (no {} beside the log)", config_path,
                  bench);

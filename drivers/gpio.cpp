@@ -6,7 +6,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <chrono>
 
 namespace brakefit::drivers {
 
@@ -72,11 +71,16 @@ GpioEncoderReader::GpioEncoderReader(const GpioConfig& c, std::unique_ptr<EdgeSo
     : cfg_(c), src_(std::move(src)), out_(out), counters_(counters), clock_(clock), framer_(c) {
   framer_.seed(src_->levels());
   th_ = std::thread([this] { run(); });
+  if (cfg_.reader_rt_priority > 0) {
+    // Best effort: without CAP_SYS_NICE (or an RLIMIT_RTPRIO) the thread stays SCHED_OTHER and
+    // the kernel FIFO alone has to ride out the delays; scheduling() says which it got.
+    sched_param sp{};
+    sp.sched_priority = cfg_.reader_rt_priority;
+    rt_ok_ = pthread_setschedparam(th_.native_handle(), SCHED_FIFO, &sp) == 0;
+  }
 }
 
 std::string GpioEncoderReader::scheduling() const {
-  for (int i = 0; i < 100 && !rt_known_; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
   if (cfg_.reader_rt_priority <= 0) return "reader not real-time (gpio.reader_rt_priority = 0)";
   return rt_ok_ ? fmt::format("reader real-time (SCHED_FIFO {})", cfg_.reader_rt_priority)
                 : fmt::format("reader NOT real-time: SCHED_FIFO {} refused (needs CAP_SYS_NICE)",
@@ -89,14 +93,6 @@ GpioEncoderReader::~GpioEncoderReader() {
 }
 
 void GpioEncoderReader::run() {
-  if (cfg_.reader_rt_priority > 0) {
-    // Best effort: without CAP_SYS_NICE (or an RLIMIT_RTPRIO) the thread stays SCHED_OTHER and
-    // the kernel FIFO alone has to ride out the delays; the daemon logs which it got.
-    sched_param sp{};
-    sp.sched_priority = cfg_.reader_rt_priority;
-    rt_ok_ = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0;
-  }
-  rt_known_ = true;
   const std::int64_t period_ns = static_cast<std::int64_t>(cfg_.frame_period_ms) * 1'000'000;
   std::int64_t next_ns = clock_.now_mono_ns() + period_ns;
   while (!stop_) {

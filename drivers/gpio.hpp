@@ -87,7 +87,7 @@ class GpioEncoderReader {
   ~GpioEncoderReader();
   GpioEncoderReader(const GpioEncoderReader&) = delete;
   GpioEncoderReader& operator=(const GpioEncoderReader&) = delete;
-  /// "real-time (SCHED_FIFO N)", "not real-time (...)" once the thread has started.
+  /// "reader real-time (SCHED_FIFO N)" or why it is not.
   std::string scheduling() const;
 
  private:
@@ -99,7 +99,7 @@ class GpioEncoderReader {
   const LiveClock& clock_;
   EncoderFramer framer_;
   std::atomic<bool> stop_{false};
-  std::atomic<bool> rt_known_{false}, rt_ok_{false};
+  bool rt_ok_ = false;  ///< SCHED_FIFO granted (set once by the constructor)
   std::thread th_;
 };
 

@@ -53,12 +53,9 @@ LocalLiveSource::LocalLiveSource(
     : gcfg_(g), rcfg_(r) {
   rtu_ = std::make_unique<ModbusRtuPressureReader>(r, q_, counters_, clock_);
   gpio_ = std::make_unique<GpioEncoderReader>(g, open_edges(g), q_, counters_, clock_);
-}
-
-std::string LocalLiveSource::describe() const {
-  return fmt::format("gpio {} ({} uAPI, {}) + modbus-rtu {}", gcfg_.chip,
-                     gcfg_.uapi == GpioConfig::Uapi::V2 ? "v2" : "v1", gpio_->scheduling(),
-                     rcfg_.device);
+  describe_ = fmt::format("gpio {} ({} uAPI, {}) + modbus-rtu {}", gcfg_.chip,
+                          gcfg_.uapi == GpioConfig::Uapi::V2 ? "v2" : "v1", gpio_->scheduling(),
+                          rcfg_.device);
 }
 
 CandumpRecorder::CandumpRecorder(std::string dir, std::uint64_t max_bytes, double max_age_s,

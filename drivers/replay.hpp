@@ -42,9 +42,10 @@ class LocalLiveSource final : public FrameSource {
   LocalLiveSource(const GpioConfig& g, const ModbusRtuConfig& r,
                   const std::function<std::unique_ptr<EdgeSource>(const GpioConfig&)>& open_edges);
   std::optional<can::LoggedFrame> next(int timeout_ms) override { return q_.pop(timeout_ms); }
-  std::string describe() const override;
+  std::string describe() const override { return describe_; }
 
  private:
+  std::string describe_;  ///< built once: describe() is asked for every status and event
   GpioConfig gcfg_;
   ModbusRtuConfig rcfg_;
   FrameQueue q_;

@@ -1,5 +1,7 @@
 #include "core/pipeline/calibration.hpp"
 
+#include <filesystem>
+
 #include "core/toml_reader.hpp"
 
 namespace brakefit::pipeline {
@@ -61,6 +63,11 @@ std::string format_calibration(const Calibration& c) {
       c.roller_ppr, c.wheel_ppr, c.fifth_wheel_ppr, c.brake_gain_n_per_bar, c.wheel_load_n,
       c.tyre_pressure_bar, c.speed_kmh, c.switch_off_slip_ratio, c.speed_timing,
       c.pressure_filter_s);
+}
+
+std::string recording_stem(const std::string& log_path) {
+  const std::filesystem::path p(log_path);
+  return (p.parent_path() / p.stem()).string();
 }
 
 }  // namespace brakefit::pipeline

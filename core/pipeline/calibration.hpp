@@ -38,5 +38,8 @@ Calibration parse_calibration(std::string_view toml_text, const std::string& sou
 Calibration calibration_from_table(const toml::table& bench, const TomlReader& rd,
                                    const std::string& prefix);
 std::string format_calibration(const Calibration& c);
+/// "dir/name.log" -> "dir/name": a recording's sidecars are <stem>.bench.toml (its calibration)
+/// and <stem>.truth.json. Path text only, no I/O.
+std::string recording_stem(const std::string& log_path);
 
 }  // namespace brakefit::pipeline
