@@ -54,6 +54,15 @@ void make_output_dir(const std::string& dir) {
 std::string resolve_model_path(const std::string& given) {
   if (!given.empty()) return given;
   if (const char* env = std::getenv("BRAKEFIT_MODEL"); env && *env) return env;
+  // Installed (the .deb, cmake --install): the model installed beside the binary,
+  // <prefix>/bin/brakefit -> <prefix>/share/brakefit/models/default.json. In the build tree there
+  // is none, and the source tree's data/models/default.json (compiled in) is used.
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const auto installed = exe.parent_path().parent_path() / "share/brakefit/models/default.json";
+    if (std::filesystem::is_regular_file(installed, ec)) return installed.string();
+  }
   return kDefaultModelPath;
 }
 

@@ -21,7 +21,8 @@ std::string read_file(const std::string& path);
 void write_file(const std::string& path, const std::string& content);
 /// Creates an output directory (and its parents); ExitError 73 naming it and the system's reason.
 void make_output_dir(const std::string& dir);
-/// The model given, else $BRAKEFIT_MODEL, else the default model shipped in data/models/.
+/// The model given, else $BRAKEFIT_MODEL, else the installed default model
+/// (<prefix>/share/brakefit/models/) or, in the build tree, the one in data/models/.
 std::string resolve_model_path(const std::string& given);
 Model load_model(const std::string& path);
 using pipeline::recording_stem;

@@ -36,10 +36,12 @@ class Daemon {
   Daemon(std::string config_path, Config cfg, Signals& sig);
   ~Daemon();
   int run();
+  /// The model at `path` (empty: none, LM only); DaemonError 78 naming 'daemon.model' if it cannot
+  /// be read or is damaged. Also `brakefitd --check`.
+  static std::unique_ptr<const Model> load_model(const std::string& path);
 
  private:
   using Clock = std::chrono::steady_clock;
-  static std::unique_ptr<const Model> load_model(const std::string& path);
   void reload();
   void publish_finished(Clock::time_point closed);
   /// Commits waiting events oldest first and publishes each after its commit; on a failure

@@ -20,9 +20,8 @@ extern "C" void on_signal(int sig) {
   else
     g_signals.stop = true;
 }
-}  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   using namespace brakefit::daemon;
   using brakefit::kExitConfig;
   using brakefit::kExitSoftware;
@@ -31,10 +30,10 @@ int main(int argc, char** argv) {
   std::string config_path = "/etc/brakefit/brakefitd.toml";
   bool check = false, print_map = false;
   app.add_option("-c,--config", config_path, "TOML configuration")->capture_default_str();
-  app.add_flag("--check", check, "validate the configuration and exit");
+  app.add_flag("--check", check, "validate the configuration, load the model it names, and exit");
   app.add_flag("--print-register-map", print_map,
                "print the Modbus register map as CSV (config/modbus_registers.csv) and exit");
-  app.set_version_flag("--version", std::string(brakefit::kVersion));
+  app.set_version_flag("--version", fmt::format("brakefitd {}", brakefit::kVersion));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -62,7 +61,17 @@ int main(int argc, char** argv) {
     return kExitConfig;
   }
   if (check) {
-    std::cout << config_path << ": ok\n";
+    // The model too: a config that names a missing or damaged model would pass and then stop the
+    // service at start (ExecStartPre runs this check).
+    try {
+      const auto model = Daemon::load_model(cfg.model_path);
+      std::cout << config_path << ": ok"
+                << (model ? fmt::format(" (model {}, {})", cfg.model_path, model->hash) : "")
+                << '\n';
+    } catch (const DaemonError& e) {
+      spdlog::error("{}: {}", config_path, e.what());
+      return e.code;
+    }
     return 0;
   }
   struct sigaction sa {};
@@ -83,4 +92,16 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return kExitSoftware;
   }
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {  // setting up the options or the logger: a bug
+    std::cerr << "brakefitd: internal error: " << e.what() << '\n';
+  } catch (...) {
+    std::cerr << "brakefitd: internal error\n";
+  }
+  return brakefit::kExitSoftware;
 }
