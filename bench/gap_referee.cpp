@@ -1,7 +1,7 @@
 // The blinded-injection referee of `brakefit gap` (issues 5 and 10):
 //   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
-//               [--generators A,B] [--crossed 1]
+//               [--generators A,B] [--crossed 1] [--only EFFECT,...]
 // Two generators make the runs: A, the project's simulator (candump logs), and B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export). For each condition (model vs measurement on the roller and on flat
@@ -25,6 +25,7 @@
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -69,6 +70,7 @@ struct Settings {
   int trials = 200, trials_other = 80, calib = 30, misspecified = 30;
   double null_share = 0.3;
   std::uint64_t seed = 1;
+  std::vector<std::string> only;  ///< --only: run just the trials drawing these effects
 };
 
 /// The gates calibrated on null sets of one generator (seeds 1 000 000+, disjoint from the
@@ -114,9 +116,17 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   draws.reserve(static_cast<std::size_t>(std::max(0, trials)));
   for (int t = 0; t < trials; ++t)
     draws.push_back(sim::draw_injection(rng, st.null_share, c, trial_gen));
+  // --only: the same draws and seeds as the whole run, the other effects' trials left out.
+  std::vector<int> kept;
+  for (int t = 0; t < trials; ++t)
+    if (st.only.empty() ||
+        std::find(st.only.begin(), st.only.end(), draws[static_cast<std::size_t>(t)].effect) !=
+            st.only.end())
+      kept.push_back(t);
   const auto results = parallel_map<sim::TrialResult>(
-      trials,
-      [&](int t) {
+      static_cast<int>(kept.size()),
+      [&](int k) {
+        const int t = kept[static_cast<std::size_t>(k)];
         return sim::run_trial(draws[static_cast<std::size_t>(t)],
                               st.seed * 1000 + static_cast<std::uint64_t>(t) +
                                   100'000 * static_cast<std::uint64_t>(c),
@@ -157,7 +167,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   }
   std::vector<std::string> said_cols = labels;
   said_cols.push_back("unexplained");
-  std::cout << fmt::format("\n## {}: {} trials, {} null\n\n", cname, trials, n_none);
+  std::cout << fmt::format("\n## {}: {} trials, {} null\n\n", cname, results.size(), n_none);
   std::cout << fmt::format("| injected \\ said | {} |\n|---|{}\n", fmt::join(said_cols, " | "),
                            std::string(said_cols.size() * 4, '-') + "|");
   for (const auto& l : labels) {
@@ -174,7 +184,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   j["trial_generator"] = sim::to_string(trial_gen);
   j["gate_generator"] = sim::to_string(gate_gen);
   j["crossed"] = trial_gen != gate_gen;
-  j["trials"] = trials;
+  j["trials"] = results.size();
   j["null_trials"] = n_none;
   j["gate_gain"] = gates.options.gate_gain;
   j["bic_margin"] = gates.options.bic_margin;
@@ -247,8 +257,15 @@ int run(int argc, char** argv) {
   std::string which = "all", generators = "A,B";
   bool crossed = true;
   g_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  for (int i = 1; i + 1 < argc; i += 2) {
+  for (int i = 1; i < argc; i += 2) {
     const std::string k = argv[i];
+    if (k == "-h" || k == "--help" || i + 1 == argc) {
+      std::cerr << "usage: gap_referee [--condition roller|ground|roller_vs_road|all] [--trials N]\n"
+                   "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
+                   "  [--seed S] [--threads N] [--generators A,B] [--crossed 1|0]\n"
+                   "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n";
+      return k == "-h" || k == "--help" ? 0 : 64;
+    }
     const char* v = argv[i + 1];
     if (k == "--trials")
       st.trials = std::atoi(v);
@@ -268,7 +285,10 @@ int run(int argc, char** argv) {
       which = v;
     else if (k == "--generators")
       generators = v;
-    else if (k == "--crossed")
+    else if (k == "--only") {
+      std::stringstream list(v);
+      for (std::string e; std::getline(list, e, ',');) st.only.push_back(e);
+    } else if (k == "--crossed")
       crossed = std::string(v) != "0" && std::string(v) != "no";
     else {
       std::cerr << "gap_referee: unknown option " << k << "\n";
