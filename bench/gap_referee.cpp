@@ -25,8 +25,8 @@
 #include <iostream>
 #include <map>
 #include <mutex>
-#include <sstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <thread>
 
 #include "brakefit/version.hpp"
@@ -119,9 +119,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   // --only: the same draws and seeds as the whole run, the other effects' trials left out.
   std::vector<int> kept;
   for (int t = 0; t < trials; ++t)
-    if (st.only.empty() ||
-        std::find(st.only.begin(), st.only.end(), draws[static_cast<std::size_t>(t)].effect) !=
-            st.only.end())
+    if (st.only.empty() || std::find(st.only.begin(), st.only.end(),
+                                     draws[static_cast<std::size_t>(t)].effect) != st.only.end())
       kept.push_back(t);
   const auto results = parallel_map<sim::TrialResult>(
       static_cast<int>(kept.size()),
@@ -260,10 +259,11 @@ int run(int argc, char** argv) {
   for (int i = 1; i < argc; i += 2) {
     const std::string k = argv[i];
     if (k == "-h" || k == "--help" || i + 1 == argc) {
-      std::cerr << "usage: gap_referee [--condition roller|ground|roller_vs_road|all] [--trials N]\n"
-                   "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
-                   "  [--seed S] [--threads N] [--generators A,B] [--crossed 1|0]\n"
-                   "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n";
+      std::cerr
+          << "usage: gap_referee [--condition roller|ground|roller_vs_road|all] [--trials N]\n"
+             "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
+             "  [--seed S] [--threads N] [--generators A,B] [--crossed 1|0]\n"
+             "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n";
       return k == "-h" || k == "--help" ? 0 : 64;
     }
     const char* v = argv[i + 1];
