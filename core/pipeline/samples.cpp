@@ -8,9 +8,14 @@ double EncoderSpeed::update(const can::EncoderMsg& m, std::int64_t t_ns) {
   if (!init_) {
     init_ = true;
     last_count_ = m.count_x4_mod;
-    last_edge_us_ = m.edge_time_us;
-    last_edge_frame_ns_ = t_ns;
+    last_edge_us_ = seen_edge_us_ = m.edge_time_us;
+    last_edge_frame_ns_ = seen_edge_frame_ns_ = t_ns;
     return speed_;
+  }
+  // The frame in which this message's last edge first came (frames without a new edge repeat it).
+  if (m.edge_time_us != seen_edge_us_) {
+    seen_edge_us_ = m.edge_time_us;
+    seen_edge_frame_ns_ = t_ns;
   }
   // Differences modulo 2^24 (count) and 2^32 (edge time), as signed values.
   auto dcount = static_cast<std::int32_t>((m.count_x4_mod - last_count_) & 0xFFFFFFu);
@@ -18,10 +23,21 @@ double EncoderSpeed::update(const can::EncoderMsg& m, std::int64_t t_ns) {
   const auto dedge_us =
       static_cast<std::int64_t>(static_cast<std::int32_t>(m.edge_time_us - last_edge_us_));
   if (dcount != 0 && dedge_us > 0 && dedge_us < kMinSpanUs) {
-    // Edges closer together than a frame can resolve (a frame 0.4 ms after the last one read
-    // 183 m/s from one count over 2.6 us): hold the speed; the next frame spans both.
-    ++short_spans_;
-  } else if (dcount != 0 && dedge_us > 0) {
+    if (seen_edge_frame_ns_ == t_ns) {
+      // Edges closer together than a frame can resolve (a frame 0.4 ms after the last one read
+      // 183 m/s from one count over 2.6 us): hold the speed; the next frame spans both.
+      ++short_spans_;
+      return speed_;
+    }
+    // No edge has come since that short span: the wheel stopped right after it (a locking
+    // wheel; held, its speed read 6 m/s for ever and the lock was never seen). Take the counts
+    // and let the speed fall as without edges since the frame that brought them.
+    last_count_ = m.count_x4_mod;
+    last_edge_us_ = m.edge_time_us;
+    last_edge_frame_ns_ = seen_edge_frame_ns_;
+    dcount = 0;
+  }
+  if (dcount != 0 && dedge_us > 0) {
     speed_ = static_cast<double>(dcount) * m_per_count_ / (static_cast<double>(dedge_us) * 1e-6);
     last_count_ = m.count_x4_mod;
     last_edge_us_ = m.edge_time_us;

@@ -44,8 +44,8 @@ class EncoderSpeed {
   std::size_t short_spans_ = 0;
   bool init_ = false;
   std::size_t resyncs_ = 0;
-  std::uint32_t last_count_ = 0, last_edge_us_ = 0;
-  std::int64_t last_edge_frame_ns_ = 0;
+  std::uint32_t last_count_ = 0, last_edge_us_ = 0, seen_edge_us_ = 0;
+  std::int64_t last_edge_frame_ns_ = 0, seen_edge_frame_ns_ = 0;
   double speed_ = 0.0;
 };
 

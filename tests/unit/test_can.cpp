@@ -262,3 +262,21 @@ TEST(EncoderSpeed, EdgesCloserThanAFrameCanResolveHoldTheSpeedUntilTheNextFrame)
   EXPECT_EQ(e.sp.short_spans(), 1u);
   EXPECT_NEAR(e.step(3, 997), 4 * e.m_per_count / 1e-3, 1e-9);  // the next frame spans both
 }
+
+TEST(EncoderSpeed, AWheelThatStopsRightAfterAShortSpanReadsZeroNotTheHeldSpeed) {
+  // A ground run's wheel locked just after two edges 60 us apart: the held 6 m/s stayed for
+  // ever, the slip read -20 and the lock was never detected (the event ended aborted).
+  EncoderFrames e(0.3, Channel::Wheel, 1'000'000);
+  for (int i = 0; i < 5; ++i) e.step(13, 1000);
+  const double held = e.step(1, 60);  // the last edge, 60 us after the one before
+  EXPECT_NEAR(held, 13 * e.m_per_count / 1e-3, 1e-9);
+  EXPECT_EQ(e.sp.short_spans(), 1u);
+  double v = held;
+  for (int i = 1; i <= 250; ++i) {  // frames every 1 ms, no edge any more
+    e.t_ns += 1'000'000;
+    v = e.sp.update(e.m, e.t_ns);
+    EXPECT_LE(v, e.m_per_count / (i * 1e-3) + 1e-12) << i;  // at most one count over the wait
+  }
+  EXPECT_EQ(v, 0.0);  // stopped: 0.2 s without an edge
+  EXPECT_EQ(e.sp.short_spans(), 1u);
+}
