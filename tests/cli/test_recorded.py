@@ -16,6 +16,11 @@ REC = os.path.join(ROOT, "data", "recorded")
 SCEN = os.path.join(ROOT, "sim", "scenarios")
 
 
+def recorded(pattern):
+    """The shipped recordings matching a glob, in the order the shell expands them."""
+    return sorted(glob.glob(os.path.join(REC, pattern)))
+
+
 class Simulate(unittest.TestCase):
     def test_writes_log_calibration_and_truth(self):
         with tempfile.TemporaryDirectory() as d:
@@ -150,8 +155,7 @@ class ExportAndCompare(unittest.TestCase):
             self.assertEqual(texts["y-label"], "brake force [N]")
 
     def test_compare_several_runs_per_side_as_the_shell_expands_them(self):
-        roller = sorted(glob.glob(os.path.join(REC, "roller_1p0bar_*.log")))
-        road = sorted(glob.glob(os.path.join(REC, "ground_1p0bar_*.log")))
+        roller, road = recorded("roller_1p0bar_*.log"), recorded("ground_1p0bar_*.log")
         r = run("compare", "--json", "--roller", *roller, "--road", *road)
         self.assertEqual(r.returncode, 0, r.stderr)
         doc = json.loads(r.stdout)
@@ -275,7 +279,7 @@ class OthersEventFiles(unittest.TestCase):
 class Gap(unittest.TestCase):
     def test_json_and_report_on_the_shipped_roller_runs(self):
         with tempfile.TemporaryDirectory() as d:
-            runs = sorted(glob.glob(os.path.join(REC, "roller_2p2bar_*.log")))
+            runs = recorded("roller_2p2bar_*.log")
             r = run("gap", "--json", "--report", d, *runs)
             self.assertEqual(r.returncode, 0, r.stderr)
             doc = json.loads(r.stdout)
@@ -352,8 +356,7 @@ class Gap(unittest.TestCase):
                 self.assertIn("cradle_cap", f.read())
 
     def test_roller_vs_road_ranks_the_transfer_effects(self):
-        roller = sorted(glob.glob(os.path.join(REC, "roller_2p2bar_*.log")))
-        road = sorted(glob.glob(os.path.join(REC, "ground_2p2bar_*.log")))
+        roller, road = recorded("roller_2p2bar_*.log"), recorded("ground_2p2bar_*.log")
         r = run("gap", "--json", "--roller", *roller, "--road", *road)
         self.assertEqual(r.returncode, 0, r.stderr)
         doc = json.loads(r.stdout)
