@@ -1,7 +1,7 @@
 // The blinded-injection referee of `brakefit gap` (issues 5 and 10):
 //   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
-//               [--generators A,B] [--crossed 1] [--only EFFECT,...]
+//               [--generators A,B] [--crossed 1] [--only EFFECT,...] [--why 1]
 // Two generators make the runs: A, the project's simulator (candump logs), and B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export). For each condition (model vs measurement on the roller and on flat
@@ -71,6 +71,7 @@ struct Settings {
   double null_share = 0.3;
   std::uint64_t seed = 1;
   std::vector<std::string> only;  ///< --only: run just the trials drawing these effects
+  bool why = false;               ///< --why 1: each miss's diagnosis notes on stderr
 };
 
 /// The gates calibrated on null sets of one generator (seeds 1 000 000+, disjoint from the
@@ -140,10 +141,16 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   std::vector<double> after_over_noise;
   int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0,
       none_exact = 0, refused = 0;
-  for (const auto& r : results) {
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    const auto& r = results[k];
     const auto& inj = r.truth;
     const std::string said = r.verdict.empty() ? "?" : r.verdict.front();
     ++confusion[inj.effect][said];
+    if (!r.exact())  // every miss, to be looked at one by one (trial index: --only keeps it)
+      std::cerr << fmt::format("[{}] trial {}: {} {:.4g} said {}\n", cname, kept[k], inj.effect,
+                               inj.magnitude, fmt::join(r.verdict, ", "));
+    if (!r.exact() && st.why)
+      for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
     if (said == "refused") {
       ++refused;
       std::cerr << fmt::format("[{}] refused ({} {}): {}\n", cname, inj.effect, inj.magnitude,
@@ -263,7 +270,8 @@ int run(int argc, char** argv) {
           << "usage: gap_referee [--condition roller|ground|roller_vs_road|all] [--trials N]\n"
              "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
              "  [--seed S] [--threads N] [--generators A,B] [--crossed 1|0]\n"
-             "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n";
+             "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
+             "  [--why 1]             (each miss's notes; the misses are always listed)\n";
       return k == "-h" || k == "--help" ? 0 : 64;
     }
     const char* v = argv[i + 1];
@@ -288,7 +296,9 @@ int run(int argc, char** argv) {
     else if (k == "--only") {
       std::stringstream list(v);
       for (std::string e; std::getline(list, e, ',');) st.only.push_back(e);
-    } else if (k == "--crossed")
+    } else if (k == "--why")
+      st.why = std::string(v) == "1";
+    else if (k == "--crossed")
       crossed = std::string(v) != "0" && std::string(v) != "no";
     else {
       std::cerr << "gap_referee: unknown option " << k << "\n";

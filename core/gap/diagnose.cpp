@@ -32,6 +32,25 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
     if (r.ref_bias_bound > 0 && rep.baseline_effects.empty())
       rep.baseline_effects.push_back(Effect::ReferenceBias);
   rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
+  // The tyre's own horizontal shift (MF 6.1 SHx) puts the curve's foot off zero slip: a nuisance
+  // slip bias too, when the baseline earns it (each candidate is scored with and without it).
+  // Tried on the raw runs and again once the encoders' ripple is out (it can hide the foot).
+  auto consider_tyre_shift = [&] {
+    if (!rep.baseline_effects.empty() && rep.baseline_effects.front() == Effect::TyreShift) return;
+    const std::vector<Effect> model{Effect::TyreShift};
+    const Fit shifted = fit_runs(pointers(runs), model, start);
+    if (rep.before.bic() - shifted.bic() < kTyreShiftBicMargin ||
+        !tyre_shift_inside(shifted, model, pointers(runs)))
+      return;
+    rep.notes.push_back(fmt::format(
+        "the curve's foot sits off zero slip (BIC {:.1f} lower with a slip bias common to the runs "
+        "of up to {:.1g}): taken as the tyre's own horizontal shift (MF 6.1 SHx), a nuisance term "
+        "of the fits, not an effect",
+        rep.before.bic() - shifted.bic(), kTyreShiftBoundRatio));
+    rep.baseline_effects = {Effect::TyreShift};
+    rep.before = shifted;
+  };
+  consider_tyre_shift();
   // The instruments' own structure first: the encoders' ripple (from the baseline's residual),
   // then each run's reference bias (levelled at zero force, which the ripple would disturb).
   // (Twice more on the refitted baseline: the first estimate sees the ripple through a
@@ -44,8 +63,10 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   const std::string levelled = level_reference_biases(runs);
   for (const std::string& note : {ripple, levelled})
     if (!note.empty()) rep.notes.push_back(note);
-  if (!ripple.empty() || !levelled.empty())
+  if (!ripple.empty() || !levelled.empty()) {
     rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
+    consider_tyre_shift();
+  }
   rep.floor = noise_floor(runs, rep.before.params);
   rep.noise_n = rep.floor.total_n();
   const MfParams base{

@@ -31,6 +31,8 @@ const char* to_string(Effect e) {
       return "cradle_cap";
     case Effect::ReferenceBias:
       return "reference_bias";
+    case Effect::TyreShift:
+      return "tyre_shift";
   }
   return "?";
 }
@@ -53,7 +55,7 @@ std::span<const EffectParam> effect_params(Effect e) {
   // PKX1-3 vs PDX1-2; r 1.3 for the simulated TNO 205/60R15), and one ratio for both misread q by
   // 40 %. Against a held curve E moves with the load as well (PEX2: E += e x relative load).
   // Built once: predict() asks for every evaluation of the fits.
-  constexpr auto kEffects = static_cast<std::size_t>(Effect::ReferenceBias) + 1;
+  constexpr auto kEffects = static_cast<std::size_t>(Effect::TyreShift) + 1;
   static const std::array<std::vector<EffectParam>, kEffects> table = [] {
     std::array<std::vector<EffectParam>, kEffects> t;
     for (std::size_t i = 0; i < kEffects; ++i) t[i] = {effect_param(static_cast<Effect>(i))};
@@ -102,6 +104,8 @@ EffectParam effect_param(Effect e) {
       return {"cap_n", 100.0, 1e5, 0.0};  // start and fit range: from the runs' peak force
     case Effect::ReferenceBias:           // range: the runs' ref_bias_bound
       return {"reference_slip_bias_ratio", -0.01, 0.01, 0.0};
+    case Effect::TyreShift:  // range: kTyreShiftBoundRatio and the runs' ref_bias_bound
+      return {"tyre_shift_ratio", -0.01, 0.01, 0.0};
   }
   return {"?", 0, 0, 0};
 }
@@ -175,6 +179,7 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
         break;
       case Effect::SlipOffset:
       case Effect::ReferenceBias:
+      case Effect::TyreShift:
         slip_offset += q;
         break;
       case Effect::RelaxationLength:

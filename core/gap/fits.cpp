@@ -63,19 +63,56 @@ struct ParamRange {
   double lo, hi, start;
 };
 /// An effect parameter's fit range: its physical range, but the cradle cap's from the runs' peak
-/// force (it starts there) and the reference bias's from the runs' quantisation.
+/// force (it starts there) and the nuisance slip bias's from the runs' quantisation and the
+/// tyre's shift (nuisance_bias_bound).
 ParamRange param_range(Effect e, const EffectParam& ep, const std::vector<const Run*>& runs,
-                       double peak) {
+                       double peak, const std::vector<Effect>& model) {
   if (e == Effect::CradleCap) return {0.3 * peak, 2.0 * peak, peak};
-  if (e == Effect::ReferenceBias) {
-    double bound = 1e-12;
-    for (const Run* r : runs) bound = std::max(bound, r->ref_bias_bound);
+  if (is_nuisance(e)) {
+    const double bound = std::max(1e-12, nuisance_bias_bound(runs, model));
     return {-bound, bound, 0.0};
   }
   return {ep.lo, ep.hi, ep.start};
 }
 
+bool contains(const std::vector<Effect>& model, Effect e) {
+  return std::find(model.begin(), model.end(), e) != model.end();
+}
+
 }  // namespace
+
+double nuisance_bias_bound(const std::vector<const Run*>& runs, const std::vector<Effect>& model) {
+  double quantisation = 0;
+  for (const Run* r : runs) quantisation = std::max(quantisation, r->ref_bias_bound);
+  const bool shift = contains(model, Effect::TyreShift) && !contains(model, Effect::SlipOffset);
+  return quantisation + (shift ? kTyreShiftBoundRatio : 0.0);
+}
+
+bool tyre_shift_inside(const Fit& f, const std::vector<Effect>& model,
+                       const std::vector<const Run*>& runs) {
+  std::size_t at = 4;
+  for (Effect e : model) {
+    if (e == Effect::TyreShift) {
+      const double bound = nuisance_bias_bound(runs, model);
+      return std::abs(f.params.at(at)) < 0.99 * bound;
+    }
+    at += effect_params(e).size();
+  }
+  return true;
+}
+
+std::vector<Effect> without_tyre_shift(const std::vector<Effect>& model,
+                                       const std::vector<const Run*>& runs) {
+  bool quantised = false;
+  for (const Run* r : runs) quantised = quantised || r->ref_bias_bound > 0;
+  std::vector<Effect> out;
+  for (Effect e : model)
+    if (e != Effect::TyreShift)
+      out.push_back(e);
+    else if (quantised)
+      out.push_back(Effect::ReferenceBias);
+  return out;
+}
 
 Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
              const MfParams& start) {
@@ -90,7 +127,7 @@ Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& eff
   Eigen::Index i = 4;
   for (Effect e : effects)
     for (const EffectParam& ep : effect_params(e)) {
-      const ParamRange r = param_range(e, ep, runs, peak);
+      const ParamRange r = param_range(e, ep, runs, peak, effects);
       lo(i) = r.lo;
       hi(i) = r.hi;
       x0(i++) = r.start;
@@ -132,7 +169,7 @@ Fit fit_effects(const std::vector<const Run*>& runs, const std::vector<Effect>& 
     for (double f : r->force_n) peak = std::max(peak, std::abs(f));
   for (Effect e : effects)
     for (const EffectParam& ep : effect_params(e)) {
-      const ParamRange r = param_range(e, ep, runs, peak);
+      const ParamRange r = param_range(e, ep, runs, peak, effects);
       lo(i) = r.lo;
       hi(i) = r.hi;
       x0(i++) = r.start;

@@ -34,7 +34,11 @@ enum class Effect {
   CradleCap,
   /// Not a candidate: a nuisance in every fit when the reference speed was constant and
   /// quantised (a slip bias common to the runs, within half a quantisation step).
-  ReferenceBias
+  ReferenceBias,
+  /// Not a candidate: a nuisance in every fit when the baseline earns it, in place of
+  /// ReferenceBias: the tyre's own horizontal shift (MF 6.1 SHx, a slip of a few 1e-4) and the
+  /// quantisation's bias, one slip bias common to the runs.
+  TyreShift
 };
 inline constexpr std::array<Effect, 8> kAllEffects = {
     Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia,  Effect::BrakeThreshold,

@@ -11,6 +11,26 @@ namespace brakefit::gap {
 
 /// MF 6.1 reference speed V0 (LONGVL), m/s.
 inline constexpr double kLongVl = 16.7;
+/// The tyre's own horizontal shift (MF 6.1's SHx = PHX1 + PHX2 dfz, a slip of a few 1e-4 at free
+/// rolling: TNO 205/60R15 2.2e-4): a nuisance slip bias (Effect::TyreShift) up to this bound when
+/// the baseline earns it (its BIC drops by the margin); a fit that names slip_offset takes the
+/// whole shift instead.
+inline constexpr double kTyreShiftBoundRatio = 5e-4;
+inline constexpr double kTyreShiftBicMargin = 10.0;
+/// The nuisance terms (a slip bias common to the runs), not effects: never named.
+inline bool is_nuisance(Effect e) {
+  return e == Effect::ReferenceBias || e == Effect::TyreShift;
+}
+/// The slip bias the nuisance terms of a model may take: half a quantisation step of a constant
+/// reference, and the tyre's shift when the model carries it (unless slip_offset takes it).
+double nuisance_bias_bound(const std::vector<const Run*>& runs, const std::vector<Effect>& model);
+/// The fit's tyre shift (0 without one) is strictly inside its bound: a foot further off is an
+/// effect's (a brake threshold, a slip offset), not the tyre's shift.
+bool tyre_shift_inside(const Fit& f, const std::vector<Effect>& model,
+                       const std::vector<const Run*>& runs);
+/// The model with its tyre shift swapped for the quantisation's bias alone (or dropped).
+std::vector<Effect> without_tyre_shift(const std::vector<Effect>& model,
+                                       const std::vector<const Run*>& runs);
 
 /// Zero-phase Savitzky-Golay smoothing (quadratic, centred; the window shrinks at the ends).
 std::vector<double> smooth(const std::vector<double>& x, int half_window);

@@ -45,6 +45,14 @@ static bool at_bound(double v, double lo, double hi) {
   return v <= lo + tol || v >= hi - tol;
 }
 
+/// The effect's parameters (the last of the fit's) all inside their physical ranges.
+static bool params_inside(Effect e, const Fit& f) {
+  const auto eps = effect_params(e);
+  for (std::size_t j = 0; j < eps.size(); ++j)
+    if (at_bound(f.params[f.params.size() - eps.size() + j], eps[j].lo, eps[j].hi)) return false;
+  return true;
+}
+
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
 
@@ -167,12 +175,17 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
                     const std::vector<Effect>& candidates, const Fitter& fit, const Options& o,
                     const char* separability_note) {
   const std::vector<const Run*> all = pointers(runs);
-  double resolution = 0;  // the slip a constant quantised reference can be off by
-  for (const Run& r : runs) resolution = std::max(resolution, r.ref_bias_bound);
-  // The baseline's nuisance terms stay in every model; they are not named.
+  // The slip the nuisance terms account for: half a step of a constant quantised reference, and
+  // the tyre's own shift when the baseline carries it.
+  const double resolution = nuisance_bias_bound(all, rep.baseline_effects);
+  // The baseline's nuisance terms stay in every model (but the tyre's shift, which each
+  // candidate may do without); they are not named.
   const std::vector<Effect> base = rep.baseline_effects;
   auto named = [&](const std::vector<Effect>& model) {
-    return std::vector<Effect>(model.begin() + static_cast<long>(base.size()), model.end());
+    std::vector<Effect> out;
+    for (Effect e : model)
+      if (!is_nuisance(e)) out.push_back(e);
+    return out;
   };
   std::vector<Effect> chosen = base;
   auto after_names = [&] {
@@ -186,6 +199,7 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
   for (std::size_t round = 0; round < o.max_effects; ++round) {
     std::vector<EffectScore> scores;
     std::vector<Fit> fits;
+    std::vector<std::vector<Effect>> models;
     for (Effect e : candidates) {
       if (std::find(chosen.begin(), chosen.end(), e) != chosen.end()) continue;
       std::vector<Effect> model = chosen;
@@ -194,14 +208,29 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
       s.effect = e;
       s.heldout_rmse_before_n = current_heldout;
       s.heldout_rmse_after_n = heldout(runs, model, fit);
-      s.gain = 1.0 - s.heldout_rmse_after_n / std::max(current_heldout, 1e-12);
       Fit f = fit(all, model);
+      // With the tyre's shift and without it: an effect the baseline bent to the shift (load
+      // transfer's reshaped curve) may need none. The variant with its parameters inside their
+      // ranges is the candidate's, then the one with the lower held-out error.
+      if (const auto plain = without_tyre_shift(model, all); plain != model) {
+        const double e_plain = heldout(runs, plain, fit);
+        Fit f_plain = fit(all, plain);
+        const bool in = params_inside(e, f) && tyre_shift_inside(f, model, all),
+                   in_plain = params_inside(e, f_plain);
+        if (in_plain != in ? in_plain : e_plain < s.heldout_rmse_after_n) {
+          s.heldout_rmse_after_n = e_plain;
+          model = plain;
+          f = std::move(f_plain);
+        }
+      }
+      s.gain = 1.0 - s.heldout_rmse_after_n / std::max(current_heldout, 1e-12);
       s.delta_bic = f.bic() - current_fit.bic();
       const auto eps = effect_params(e);
       for (std::size_t j = 0; j < eps.size(); ++j)
         s.params.emplace_back(eps[j].name, f.params[f.params.size() - eps.size() + j]);
       scores.push_back(s);
       fits.push_back(std::move(f));
+      models.push_back(std::move(model));
     }
     if (scores.empty()) break;
     std::vector<std::size_t> order(scores.size());
@@ -239,16 +268,19 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
             eps[j].name, v));
         e.decision = fmt::format("{} at the end of its physical range ({:.4g})", eps[j].name, v);
       }
-      // A slip offset no larger than the reference's resolution leaves (half a quantisation
-      // step of a constant reference, on average over the runs) is that resolution, not an
-      // effect.
+      // A slip offset no larger than the nuisance terms take (half a quantisation step of a
+      // constant reference, and the tyre's own shift when the baseline carries it) is that
+      // resolution, not an effect.
       if (inside && e.effect == Effect::SlipOffset && std::abs(e.params[0].second) <= resolution) {
         inside = false;
         rep.notes.push_back(fmt::format(
-            "slip_offset {:.2g} is within the reference speed's resolution ({:.2g}, half a "
-            "quantisation step): not accepted",
-            e.params[0].second, resolution));
-        e.decision = fmt::format("within the reference speed's resolution ({:.2g})", resolution);
+            "slip_offset {:.2g} is within the slip the nuisance terms account for ({:.2g}: half a "
+            "quantisation step of the reference{}): not accepted",
+            e.params[0].second, resolution,
+            std::find(base.begin(), base.end(), Effect::TyreShift) != base.end()
+                ? ", and the tyre's own shift"
+                : ""));
+        e.decision = fmt::format("within the nuisance terms' slip ({:.2g})", resolution);
       }
       if (inside) pick = k;
     }
@@ -285,7 +317,7 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
     if (pick == order.size()) break;
     const EffectScore& best = scores[order[pick]];
     if (round > 0) rep.effects.push_back(best);
-    chosen.push_back(best.effect);
+    chosen = models[order[pick]];
     current_heldout = best.heldout_rmse_after_n;
     current_fit = fits[order[pick]];
   }

@@ -1,6 +1,7 @@
 // The gap diagnosis on simulated runs whose effects are known.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
 
 #include "core/gap/gap.hpp"
@@ -81,7 +82,11 @@ TEST(Gap, WheelInertiaIsFoundFirst) {
   print(r);
   ASSERT_FALSE(r.verdict.empty());
   EXPECT_EQ(r.verdict.front(), "wheel_inertia");
-  const double inertia = r.after.params.at(4);
+  // The fit's parameters follow the model (the baseline's nuisance terms first): found by name.
+  const auto names = gap::param_names(r.accepted);
+  const auto at = std::find(names.begin(), names.end(), "inertia_kgm2");
+  ASSERT_NE(at, names.end());
+  const double inertia = r.after.params.at(static_cast<std::size_t>(at - names.begin()));
   EXPECT_NEAR(inertia, 1.0, 0.25);  // magnitude within 25 % (measured 1.01)
   EXPECT_LT(r.gap_after_rmse_n, r.gap_before_rmse_n);
   EXPECT_LT(r.gap_after_rmse_n, 1.2 * r.noise_n);
@@ -132,6 +137,36 @@ TEST(Gap, ACradleCapIsFoundFromTheRunawayOrFittedWithTheWheelInertia) {
   // Without the cap the runs run away at the tyre's peak: no cap evidence.
   const auto free_runs = sim::simulate_runs(sim::referee_null(can::BenchKind::Roller), 21);
   EXPECT_FALSE(gap::cradle_cap_evidence(free_runs).has_value());
+}
+
+TEST(Gap, TheTyresOwnShiftIsANuisanceNotASlipOffset) {
+  // MF 6.1 tyres carry a horizontal shift (SHx, a slip of a few 1e-4: the foot of the curve off
+  // zero slip). On null ground runs with the slip moved by 3e-4 the shift is levelled as a
+  // nuisance term of every fit: none is named, the baseline carries it with its value; a real
+  // slip offset (a radius error of 0.4 %) beyond it is still named with its magnitude.
+  for (const double shift : {3e-4, 4e-3}) {
+    auto rs = sim::simulate_runs(sim::referee_null(can::BenchKind::Ground), 5);
+    ASSERT_GE(rs.size(), 3u);
+    for (gap::Run& r : rs)
+      for (double& k : r.slip) k += shift;
+    const gap::Report r =
+        gap::diagnose(rs, sim::pooled_start(rs), gap::calibrated_options(gap::Condition::Ground));
+    print(r);
+    ASSERT_FALSE(r.verdict.empty());
+    if (shift < 1e-3) {
+      EXPECT_EQ(r.verdict, std::vector<std::string>{"none"});
+      ASSERT_EQ(r.baseline_effects, std::vector<gap::Effect>{gap::Effect::TyreShift});
+      EXPECT_NEAR(r.before.params.at(4), shift, 0.2 * shift);
+      EXPECT_LT(r.gap_before_rmse_n, 1.5 * r.noise_n);
+    } else {
+      EXPECT_EQ(r.verdict.front(), "slip_offset");
+      const auto names = gap::param_names(r.accepted);
+      const auto at = std::find(names.begin(), names.end(), "slip_offset_ratio");
+      ASSERT_NE(at, names.end());
+      EXPECT_NEAR(r.after.params.at(static_cast<std::size_t>(at - names.begin())), shift,
+                  0.1 * shift);
+    }
+  }
 }
 
 // A small subset of the blinded-injection referee (bench/gap_referee runs >= 200 trials).
