@@ -38,15 +38,15 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   auto consider_tyre_shift = [&] {
     if (!rep.baseline_effects.empty() && rep.baseline_effects.front() == Effect::TyreShift) return;
     const std::vector<Effect> model{Effect::TyreShift};
-    const Fit shifted = fit_runs(pointers(runs), model, start);
-    if (rep.before.bic() - shifted.bic() < kTyreShiftBicMargin ||
-        !tyre_shift_inside(shifted, model, pointers(runs)))
-      return;
+    const auto all = pointers(runs);
+    const Fit shifted = fit_runs(all, model, start);
+    const double drop = rep.before.bic() - shifted.bic();
+    if (drop < kTyreShiftBicMargin || !tyre_shift_inside(shifted, model, all)) return;
     rep.notes.push_back(fmt::format(
         "the curve's foot sits off zero slip (BIC {:.1f} lower with a slip bias common to the runs "
         "of up to {:.1g}): taken as the tyre's own horizontal shift (MF 6.1 SHx), a nuisance term "
         "of the fits, not an effect",
-        rep.before.bic() - shifted.bic(), kTyreShiftBoundRatio));
+        drop, kTyreShiftBoundRatio));
     rep.baseline_effects = {Effect::TyreShift};
     rep.before = shifted;
   };

@@ -79,13 +79,18 @@ bool contains(const std::vector<Effect>& model, Effect e) {
   return std::find(model.begin(), model.end(), e) != model.end();
 }
 
+/// Half a quantisation step of a constant reference, the largest over the runs (0: none).
+double quantisation_bias_bound(const std::vector<const Run*>& runs) {
+  double bound = 0;
+  for (const Run* r : runs) bound = std::max(bound, r->ref_bias_bound);
+  return bound;
+}
+
 }  // namespace
 
 double nuisance_bias_bound(const std::vector<const Run*>& runs, const std::vector<Effect>& model) {
-  double quantisation = 0;
-  for (const Run* r : runs) quantisation = std::max(quantisation, r->ref_bias_bound);
   const bool shift = contains(model, Effect::TyreShift) && !contains(model, Effect::SlipOffset);
-  return quantisation + (shift ? kTyreShiftBoundRatio : 0.0);
+  return quantisation_bias_bound(runs) + (shift ? kTyreShiftBoundRatio : 0.0);
 }
 
 bool tyre_shift_inside(const Fit& f, const std::vector<Effect>& model,
@@ -103,8 +108,7 @@ bool tyre_shift_inside(const Fit& f, const std::vector<Effect>& model,
 
 std::vector<Effect> without_tyre_shift(const std::vector<Effect>& model,
                                        const std::vector<const Run*>& runs) {
-  bool quantised = false;
-  for (const Run* r : runs) quantised = quantised || r->ref_bias_bound > 0;
+  const bool quantised = quantisation_bias_bound(runs) > 0;
   std::vector<Effect> out;
   for (Effect e : model)
     if (e != Effect::TyreShift)
