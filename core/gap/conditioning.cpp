@@ -103,15 +103,20 @@ double smoothing_noise_gain(int half_window) {
   return std::sqrt(3 * (3 * m * m + 3 * m - 1) / ((2 * m - 1) * (2 * m + 1) * (2 * m + 3)));
 }
 
+/// Samples an excursion into a level must last to be shaped as a peak (see dequantise).
+constexpr std::size_t kMinExcursionSamples = 4;
+
 std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
                                double step) {
   // Anchors: where the level changes between samples i-1 and i, the signal crossed the middle of
   // the two levels, half-way in time.
   std::vector<double> at, val;
+  std::vector<std::size_t> first;  // the first sample after each anchor
   for (std::size_t i = 1; i < x.size(); ++i)
     if (x[i] != x[i - 1]) {
       at.push_back(0.5 * (t[i] + t[i - 1]));
       val.push_back(0.5 * (x[i] + x[i - 1]));
+      first.push_back(i);
     }
   if (at.size() < 2) return x;
   const std::size_t n = at.size();
@@ -128,6 +133,21 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
       v = interp(at, val, t[i]);
     // The signal lies within half a step of the level it was quantised to.
     y[i] = std::clamp(v, x[i] - 0.5 * step, x[i] + 0.5 * step);
+  }
+  // An excursion: the signal crossed into a level and back out over the same boundary (the peak
+  // of a ripple, or a trend turning). Between the two crossings the anchors say nothing but
+  // "inside the level"; a straight line along the boundary would clip every peak there (an
+  // encoder's ripple of about one step read 40 % too small). The peak is put at the level, the
+  // middle of where it can be, on a parabola through the two crossings. (A short excursion is
+  // noise dithering across the boundary and stays on it.)
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const std::size_t i0 = first[k], i1 = first[k + 1];
+    if (val[k + 1] != val[k] || i1 - i0 < kMinExcursionSamples) continue;
+    const double span = at[k + 1] - at[k];
+    for (std::size_t i = i0; i < i1; ++i) {
+      const double u = (t[i] - at[k]) / span;
+      y[i] = val[k] + (x[i] - val[k]) * 4 * u * (1 - u);
+    }
   }
   return y;
 }
