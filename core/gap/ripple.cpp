@@ -21,7 +21,7 @@ namespace {
 /// from the run's own trend; a shorter run (down to kMinPhaseRevolutions) takes the amplitude
 /// found on the longer runs of the same encoder and estimates only its phase.
 constexpr double kMinRevolutions = 1.5;
-constexpr double kMinPhaseRevolutions = 1.0;
+constexpr double kMinPhaseRevolutions = 0.5;
 /// The residual the ripple explains at the revolution rate against the most it explains at half
 /// and at twice that rate.
 constexpr double kNarrowBand = 2.0;
@@ -50,16 +50,30 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vect
     const double u = r.t_s[i] / t_end;
     double p = 1;
     for (int k = 0; k <= trend; ++k, p *= u) a(row, k) = p;
-    Eigen::Index c = trend + 1;
-    for (int e = 0; e < 2; ++e) {
-      if (!use[static_cast<std::size_t>(e)]) continue;
-      const double ang = frequency_scale[static_cast<std::size_t>(e)] *
-                         (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
-      const double sign = e == 0 ? 1.0 : -1.0;
-      a(row, c++) = sign * gain[i] * std::cos(ang);
-      a(row, c++) = sign * gain[i] * std::sin(ang);
-    }
     b(row) = y[i];
+  }
+  // The ripple is in the slip, the residual in the force: a filtered force channel shows the
+  // model's image of it through the same filter (at 15 Hz, a fifth wheel at 70 km/h, a 19 ms
+  // filter passes half of it, 60 degrees late): the columns go through it too.
+  Eigen::Index c = trend + 1;
+  for (std::size_t e = 0; e < 2; ++e) {
+    if (!use[e]) continue;
+    const double sign = e == 0 ? 1.0 : -1.0;
+    std::vector<double> cos_col(n), sin_col(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double ang = frequency_scale[e] * (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
+      cos_col[i] = sign * gain[i] * std::cos(ang);
+      sin_col[i] = sign * gain[i] * std::sin(ang);
+    }
+    if (r.pressure_filter_s > 0) {
+      filter_first_order(r.t_s, cos_col, r.pressure_filter_s, cos_col.front());
+      filter_first_order(r.t_s, sin_col, r.pressure_filter_s, sin_col.front());
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      a(static_cast<Eigen::Index>(i), c) = cos_col[i];
+      a(static_cast<Eigen::Index>(i), c + 1) = sin_col[i];
+    }
+    c += 2;
   }
   const Eigen::VectorXd x = a.colPivHouseholderQr().solve(b);
   const Eigen::VectorXd res = b - a * x;
@@ -67,7 +81,7 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vect
   const double s2 =
       res.squaredNorm() / std::max(1.0, static_cast<double>(n) - static_cast<double>(cols));
   const Eigen::MatrixXd cov = s2 * (a.transpose() * a).inverse();
-  Eigen::Index c = trend + 1;
+  c = trend + 1;
   for (std::size_t e = 0; e < 2; ++e) {
     if (!use[e]) continue;
     out.used[e] = true;
