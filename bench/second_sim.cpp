@@ -75,6 +75,12 @@ int main(int argc, char** argv) {
     std::cout << fmt::format("tyre {} Fz {:.0f} N, {:.2f} bar; effect {} magnitude {:.4g}\n",
                              set.runs.front().tyre.name, set.runs.front().fz_n,
                              set.runs.front().pressure_pa / 1e5, effect, set.magnitude);
+    const auto& tx = set.runs.front().tester;
+    std::cout << fmt::format(
+        "export: speed step {:.2g} m/s, ripple wheel {:.2g} reference {:.2g}, pressure filter "
+        "{:.3g} s, {} Hz\n",
+        tx.speed_step_mps, tx.eccentricity_wheel, tx.eccentricity_ref, tx.pressure_filter_s,
+        tx.sample_hz);
     for (std::size_t k = 0; k < set.runs.size(); ++k) {
       const std::string path = fmt::format("{}/{}-{}-{}.csv", out, bench, effect, k);
       std::ofstream(path) << sim2::simulate_event_csv(set.runs[k]);
