@@ -103,82 +103,6 @@ double smoothing_noise_gain(int half_window) {
   return std::sqrt(3 * (3 * m * m + 3 * m - 1) / ((2 * m - 1) * (2 * m + 1) * (2 * m + 3)));
 }
 
-/// Samples an excursion into a level must last to be shaped as a peak (see dequantise).
-constexpr std::size_t kMinExcursionSamples = 4;
-
-std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
-                               double step) {
-  // Anchors: where the level changes between samples i-1 and i, the signal crossed the middle of
-  // the two levels, half-way in time.
-  std::vector<double> at, val;
-  std::vector<std::size_t> first;  // the first sample after each anchor
-  for (std::size_t i = 1; i < x.size(); ++i)
-    if (x[i] != x[i - 1]) {
-      at.push_back(0.5 * (t[i] + t[i - 1]));
-      val.push_back(0.5 * (x[i] + x[i - 1]));
-      first.push_back(i);
-    }
-  if (at.size() < 2) return x;
-  const std::size_t n = at.size();
-  const double slope0 = (val[1] - val[0]) / std::max(at[1] - at[0], 1e-9);
-  const double slope1 = (val[n - 1] - val[n - 2]) / std::max(at[n - 1] - at[n - 2], 1e-9);
-  std::vector<double> y(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    double v = 0;
-    if (t[i] <= at.front())
-      v = val.front() + slope0 * (t[i] - at.front());  // extrapolated along the first anchors
-    else if (t[i] >= at.back())
-      v = val.back() + slope1 * (t[i] - at.back());
-    else
-      v = interp(at, val, t[i]);
-    // The signal lies within half a step of the level it was quantised to.
-    y[i] = std::clamp(v, x[i] - 0.5 * step, x[i] + 0.5 * step);
-  }
-  // An excursion: the signal crossed into a level and back out over the same boundary (the peak
-  // of a ripple, or a trend turning). Between the two crossings the anchors say nothing but
-  // "inside the level"; a straight line along the boundary would clip every peak there (an
-  // encoder's ripple of about one step read 40 % too small). The peak is put at the level, the
-  // middle of where it can be, on a parabola through the two crossings. (A short excursion is
-  // noise dithering across the boundary and stays on it.)
-  for (std::size_t k = 0; k + 1 < n; ++k) {
-    const std::size_t i0 = first[k], i1 = first[k + 1];
-    if (val[k + 1] != val[k] || i1 - i0 < kMinExcursionSamples) continue;
-    const double span = at[k + 1] - at[k];
-    for (std::size_t i = i0; i < i1; ++i) {
-      const double u = (t[i] - at[k]) / span;
-      y[i] = val[k] + (x[i] - val[k]) * 4 * u * (1 - u);
-    }
-  }
-  return y;
-}
-
-ChannelNoise channel_noise(const std::vector<double>& x) {
-  ChannelNoise out;
-  if (x.size() < 3) return out;
-  std::vector<double> d2;
-  for (std::size_t i = 1; i + 1 < x.size(); ++i)
-    d2.push_back(std::abs(x[i + 1] - 2 * x[i] + x[i - 1]));
-  std::nth_element(d2.begin(), d2.begin() + static_cast<long>(d2.size() / 2), d2.end());
-  const double random_sd = d2[d2.size() / 2] / 0.6745 / std::sqrt(6.0);
-  // Quantisation: the smallest non-zero step, if (nearly) every non-zero step is a whole
-  // multiple of it.
-  double scale = 0;
-  for (double v : x) scale = std::max(scale, std::abs(v));
-  std::vector<double> steps;
-  for (std::size_t i = 1; i < x.size(); ++i)
-    if (const double d = std::abs(x[i] - x[i - 1]); d > 1e-12 * std::max(scale, 1.0))
-      steps.push_back(d);
-  if (!steps.empty()) {
-    const double q = *std::min_element(steps.begin(), steps.end());
-    std::size_t whole = 0;
-    for (double d : steps)
-      if (std::abs(d / q - std::round(d / q)) < 0.1) ++whole;
-    if (static_cast<double>(whole) >= 0.9 * static_cast<double>(steps.size())) out.step = q;
-  }
-  out.sd = std::max(random_sd, out.step / std::sqrt(12.0));
-  return out;
-}
-
 namespace {
 
 /// Least-squares line through the samples of the first window_s of a run.
@@ -211,6 +135,9 @@ StartLine start_line(const std::vector<double>& t_s, const std::vector<double>& 
 
 /// The initial slip rate is fitted over this much of the run's start.
 constexpr double kInitialWindowS = 0.04;
+/// A quantised roller spanning fewer levels than this is held at speed (a ripple of 5e-4 of
+/// 5.5 km/h is 3 steps of 0.5 mm/s peak to peak, the rounding one more).
+constexpr double kHeldRollerSteps = 5.0;
 /// Past this slip the wheel is taken as locked.
 constexpr double kLockSlip = 0.9;
 /// A lock-up runaway starts past the linear region: jumps below this slip are noise. (2 %: a
@@ -277,6 +204,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   // The two speeds come from one export at one resolution: a reference that never changed level
   // (a roller held at speed) shows no step of its own but has the wheel's.
   // (A roller's reference flipping between two neighbouring levels is such a channel too.)
+  bool ref_smooth = false;  // the reference was read as a smooth speed (not rebuilt)
   if (const double q = std::max(ref_noise.step, wheel_noise.step); q > 0) {
     const auto [lo, hi] = std::minmax_element(full.v_ref_mps.begin(), full.v_ref_mps.end());
     if (*hi - *lo < (c.bench == can::BenchKind::Roller ? 1.5 : 0.5) * q) {
@@ -292,10 +220,24 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
         mean /= static_cast<double>(full.v_ref_mps.size());
         std::fill(full.v_ref_mps.begin(), full.v_ref_mps.end(), mean);
       }
+    } else if (c.bench == can::BenchKind::Roller && ref_noise.step > 0 &&
+               *hi - *lo < kHeldRollerSteps * q) {
+      // A roller held at speed whose encoder's ripple dithers a few levels: rebuilt from its
+      // transitions, a ripple of about a step is clipped (52-105 % of it, by where the levels
+      // fall) and what is left of it in the slip looks like a lag. The ripple is the encoder's,
+      // not the roller's (the roller is held by its motor): the speed is the smooth trend under
+      // it, fitted to the staircase.
+      if (auto trend = held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
+          !trend.empty()) {
+        full.v_ref_mps = std::move(trend);
+        full.ref_bias_bound = 0.5 * q / std::max(*lo, 1e-6);
+        ref_smooth = true;
+      }
     }
   }
   for (auto [v, cn] : {std::pair{&full.v_ref_mps, &ref_noise}, std::pair{&v_wheel, &wheel_noise}})
-    if (cn->step > 0) *v = dequantise(full.t_s, *v, cn->step);
+    if (cn->step > 0 && !(v == &full.v_ref_mps && ref_smooth))
+      *v = dequantise(full.t_s, *v, cn->step);
   // Noise of each channel: robust scale of second differences (the signal is smooth at 1 kHz;
   // first differences would count a 250 bar/s ramp, 16 N per sample, as noise), and at least
   // the quantisation's step/sqrt(12) (a slowly moving quantised signal has mostly zero

@@ -50,6 +50,11 @@ ChannelNoise channel_noise(const std::vector<double>& x);
 /// extrapolated beyond them, and never more than half a step from the level read.
 std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
                                double step);
+/// A roller held at speed and read through a quantised channel whose levels its encoder's ripple
+/// dithers: the smooth speed under the ripple (a quadratic trend fitted with the ripple's two
+/// first harmonics to the staircase). Empty when the run is too short to tell them apart.
+std::vector<double> held_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
+                                      double roller_radius_m);
 /// The noise a channel keeps after the smoother (half window), measured on the channel: right
 /// for white, anti-correlated and correlated errors alike.
 double smoothed_noise_sd(const std::vector<double>& x, int half_window);
