@@ -54,11 +54,14 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   // The instruments' own structure first: the encoders' ripple (from the baseline's residual),
   // then each run's reference bias (levelled at zero force, which the ripple would disturb).
   // (Twice more on the refitted baseline: the first estimate sees the ripple through a
-  // baseline it has bent.)
+  // baseline it has bent. Each estimate starts from the slip as conditioned.)
+  // (A pass that finds nothing leaves the previous one's.)
   std::string ripple = remove_encoder_ripple(runs, rep.before.params, rep.baseline_effects);
   for (int pass = 0; pass < 2 && !ripple.empty(); ++pass) {
     rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
-    if (remove_encoder_ripple(runs, rep.before.params, rep.baseline_effects).empty()) break;
+    std::string again = remove_encoder_ripple(runs, rep.before.params, rep.baseline_effects);
+    if (again.empty()) break;
+    ripple = std::move(again);
   }
   const std::string levelled = level_reference_biases(runs);
   for (const std::string& note : {ripple, levelled})

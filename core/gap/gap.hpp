@@ -92,6 +92,9 @@ struct Run {
   /// Per point: the standard deviation of the smoothed slip that the speed channels' noise
   /// leaves (errors in variables: through the local slope it is force noise the fit cannot remove).
   std::vector<double> slip_sd;
+  /// The slip and its noise as conditioned, before the encoders' ripple was taken out: each
+  /// estimate of the ripple starts from them again (remove_encoder_ripple).
+  std::vector<double> slip_as_conditioned, slip_sd_as_conditioned;
   /// A constant reference speed read through a quantised channel is off its level by up to half
   /// a step: a slip bias of up to this much, its own in every run (0: not such a channel).
   double ref_bias_bound = 0.0;

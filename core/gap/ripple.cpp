@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
@@ -22,6 +23,12 @@ namespace {
 /// found on the longer runs of the same encoder and estimates only its phase.
 constexpr double kMinRevolutions = 1.5;
 constexpr double kMinPhaseRevolutions = 0.5;
+/// Shorter still (B's 60 bar/s roller stops turn the wheel 0.4-0.8 times), the phase alone is
+/// scanned down to this. (Where a longer run's free phase fit disagrees with the encoder's
+/// amplitude, the residual holds more than the ripple: scanned there, it took part of a 4 bar
+/// brake threshold's signature.)
+constexpr double kMinScanRevolutions = 0.25;
+constexpr int kPhaseSteps = 72;
 /// The residual the ripple explains at the revolution rate against the most it explains at half
 /// and at twice that rate.
 constexpr double kNarrowBand = 2.0;
@@ -93,6 +100,55 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vect
   return out;
 }
 
+/// A run too short to tell a ripple's amplitude from its trend: with the amplitude known from the
+/// encoder's longer runs, only the phase is scanned (a linear trend refitted at each), and kept
+/// when it explains some of the residual. Returns the cos and sin coefficients, or nothing.
+std::optional<std::array<double, 2>> scan_phase(const Run& r, const std::vector<double>& y,
+                                                const std::vector<double>& gain, std::size_t e,
+                                                double amplitude) {
+  const std::size_t n = r.t_s.size();
+  std::array<bool, 2> use{};
+  use[e] = true;
+  // The free fit's columns, residualised on the trend: SSR(c, s) is then a quadratic form.
+  Eigen::MatrixXd trend(static_cast<Eigen::Index>(n), 2), cols(static_cast<Eigen::Index>(n), 3);
+  const double t_end = std::max(r.t_s.back(), 1e-6);
+  const double sign = e == 0 ? 1.0 : -1.0;
+  std::vector<double> cos_col(n), sin_col(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ang = e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i];
+    cos_col[i] = sign * gain[i] * std::cos(ang);
+    sin_col[i] = sign * gain[i] * std::sin(ang);
+  }
+  if (r.pressure_filter_s > 0) {
+    filter_first_order(r.t_s, cos_col, r.pressure_filter_s, cos_col.front());
+    filter_first_order(r.t_s, sin_col, r.pressure_filter_s, sin_col.front());
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto row = static_cast<Eigen::Index>(i);
+    trend(row, 0) = 1;
+    trend(row, 1) = r.t_s[i] / t_end;
+    cols(row, 0) = y[i];
+    cols(row, 1) = cos_col[i];
+    cols(row, 2) = sin_col[i];
+  }
+  const Eigen::MatrixXd res = cols - trend * trend.colPivHouseholderQr().solve(cols);
+  const Eigen::MatrixXd g = res.transpose() * res;  // y, C, S inner products
+  double best = g(0, 0), best_c = 0, best_s = 0;
+  for (int k = 0; k < kPhaseSteps; ++k) {
+    const double phi = 2 * M_PI * k / kPhaseSteps;
+    const double c = amplitude * std::cos(phi), s = amplitude * std::sin(phi);
+    const double ssr = g(0, 0) - 2 * c * g(0, 1) - 2 * s * g(0, 2) + c * c * g(1, 1) +
+                       2 * c * s * g(1, 2) + s * s * g(2, 2);
+    if (ssr < best) {
+      best = ssr;
+      best_c = c;
+      best_s = s;
+    }
+  }
+  if (best_c == 0 && best_s == 0) return std::nullopt;
+  return std::array<double, 2>{best_c, best_s};
+}
+
 }  // namespace
 
 std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<double>& params,
@@ -103,6 +159,20 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     std::array<double, 2> revolutions{};
   };
   std::vector<Prepared> prep(runs.size());
+  // Each estimate starts from the slip as conditioned, against the latest baseline (refitted on
+  // the slip the previous estimate corrected): the estimates are not stacked, so a short run's
+  // phase, placed once against a bent baseline, is placed again against a straighter one.
+  std::vector<std::pair<std::vector<double>, std::vector<double>>> on_entry;
+  for (Run& r : runs) {
+    on_entry.emplace_back(r.slip, r.slip_sd);
+    if (r.slip_as_conditioned.empty()) {
+      r.slip_as_conditioned = r.slip;
+      r.slip_sd_as_conditioned = r.slip_sd;
+    } else {
+      r.slip = r.slip_as_conditioned;
+      r.slip_sd = r.slip_sd_as_conditioned;
+    }
+  }
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const Run& r = runs[k];
     const std::size_t n = r.t_s.size();
@@ -167,8 +237,9 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   }
   // Pass 2: shorter runs (and longer ones whose own estimate did not pass) take that amplitude
   // and their phase from a regression with a linear trend, when that regression's own amplitude
-  // agrees with it (within a factor of 2). Where it does not, the ripple stays in the run and
-  // its slip noise carries it (amplitude / sqrt 2 of (1 - s)): the floor is honest about it.
+  // agrees with it (within a factor of 2); a run under half a revolution from a scan of the
+  // phase alone at that amplitude. Where neither places it, the ripple stays in the run and its
+  // slip noise carries it (amplitude / sqrt 2 of (1 - s)): the floor is honest about it.
   for (std::size_t k = 0; k < runs.size(); ++k) {
     if (prep[k].gain.empty()) continue;
     std::array<bool, 2> use{};
@@ -185,6 +256,14 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
         fits[k].s[e] = short_fit.s[e] * amplitude[e] / amp;
         continue;
       }
+      if (prep[k].revolutions[e] >= kMinScanRevolutions &&
+          prep[k].revolutions[e] < kMinPhaseRevolutions)
+        if (const auto cs = scan_phase(runs[k], prep[k].residual, prep[k].gain, e, amplitude[e])) {
+          fits[k].used[e] = true;
+          fits[k].c[e] = (*cs)[0];
+          fits[k].s[e] = (*cs)[1];
+          continue;
+        }
       Run& r = runs[k];
       for (std::size_t i = 0; i < r.slip_sd.size(); ++i)
         r.slip_sd[i] = std::hypot(r.slip_sd[i], amplitude[e] / std::sqrt(2.0) * (1 - r.slip[i]));
@@ -207,7 +286,15 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       r.slip[i] += fix;
     }
   }
-  if (corrected == 0 && uncorrected == 0) return {};
+  if (corrected == 0 && uncorrected == 0) {
+    // Nothing found this time (an estimate's narrow-band test can fail against a refitted
+    // baseline): the slips stay as the previous estimate left them.
+    for (std::size_t k = 0; k < runs.size(); ++k) {
+      runs[k].slip = std::move(on_entry[k].first);
+      runs[k].slip_sd = std::move(on_entry[k].second);
+    }
+    return {};
+  }
   return fmt::format(
       "encoder ripple (once per revolution: an eccentric or unevenly divided code wheel) was "
       "found and taken out of the slip in {} of {} runs (amplitude of the speed: wheel {:.2g}, "
