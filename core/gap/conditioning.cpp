@@ -399,10 +399,12 @@ std::string level_reference_biases(std::vector<Run>& runs) {
   for (std::size_t k = 0; k < runs.size(); ++k) {
     Run& r = runs[k];
     if (r.ref_bias_bound <= 0) continue;
-    const double b = std::clamp(icpt[k] - mean, -r.ref_bias_bound, r.ref_bias_bound);
-    for (double& x : r.slip) x -= b;
-    r.ref_bias_removed = b;
-    largest = std::max(largest, std::abs(b));
+    // Levelled again after the ripple is out: the total stays within the bound.
+    const double total =
+        std::clamp(r.ref_bias_removed + icpt[k] - mean, -r.ref_bias_bound, r.ref_bias_bound);
+    for (double& x : r.slip) x -= total - r.ref_bias_removed;
+    r.ref_bias_removed = total;
+    largest = std::max(largest, std::abs(total));
   }
   return fmt::format(
       "the reference speed was constant and quantised (a roller read at {:.2g} m/s resolution): "

@@ -56,6 +56,10 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   // (Twice more on the refitted baseline: the first estimate sees the ripple through a
   // baseline it has bent. Each estimate starts from the slip as conditioned.)
   // (A pass that finds nothing leaves the previous one's.)
+  // Levelled before as well: a run's own slip bias over a short run would be taken for part
+  // of a ripple (its phase placed to cancel 8e-4 of slip, 83 N at the start of a B roller stop).
+  if (!level_reference_biases(runs).empty())
+    rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
   std::string ripple = remove_encoder_ripple(runs, rep.before.params, rep.baseline_effects);
   for (int pass = 0; pass < 2 && !ripple.empty(); ++pass) {
     rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
