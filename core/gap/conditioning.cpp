@@ -347,26 +347,24 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   return r;
 }
 
-std::string level_reference_biases(std::vector<Run>& runs) {
-  // The slip at zero force is the same in every run (a slip offset is the runs' common effect):
-  // a line of common slope with an intercept per run through the linear region (5-30 % of the
-  // largest force); each run's intercept less the mean intercept, within its bound, is its
-  // reference bias.
-  std::size_t biased = 0;
-  for (const Run& r : runs) biased += r.ref_bias_bound > 0;
-  if (biased == 0 || runs.size() < 2) return {};
+namespace {
+
+/// Each run's intercept at zero force less the runs' mean: a line of common slope with an
+/// intercept per run through the linear region (5-30 % of the largest force), the slip taken
+/// lag_s earlier than the force (and the declared filter's tau: a filtered force channel shows
+/// the linear region's force of tau earlier, else each ramp rate would level to its own lag).
+/// Empty when a run has too little of the linear region.
+std::vector<double> intercept_offsets(const std::vector<Run>& runs, double lag_s) {
   double peak = 0;
   for (const Run& r : runs)
     for (double f : r.force_n) peak = std::max(peak, f);
   std::vector<double> mf(runs.size()), ms(runs.size());
-  // A filtered force channel shows the linear region's force of tau earlier: the slip it is
-  // compared with is taken then (else each ramp rate would level to its own lag).
   std::vector<std::vector<double>> slips;
   for (const Run& r : runs) {
     std::vector<double> s = r.slip;
-    if (r.pressure_filter_s > 0)
+    if (const double back = r.pressure_filter_s + lag_s; back != 0)
       for (std::size_t i = 0; i < s.size(); ++i)
-        s[i] = interp(r.t_s, r.slip, std::max(r.t_s.front(), r.t_s[i] - r.pressure_filter_s));
+        s[i] = interp(r.t_s, r.slip, std::max(r.t_s.front(), r.t_s[i] - back));
     slips.push_back(std::move(s));
   }
   double sff = 0, sfs = 0;
@@ -395,15 +393,38 @@ std::string level_reference_biases(std::vector<Run>& runs) {
   double mean = 0;
   for (std::size_t k = 0; k < runs.size(); ++k) mean += icpt[k] = ms[k] - slope * mf[k];
   mean /= static_cast<double>(runs.size());
+  for (double& x : icpt) x -= mean;
+  return icpt;
+}
+
+/// The lag at which the levelling's sensitivity to a time offset is measured.
+constexpr double kLevellingLagProbeS = 0.01;
+
+}  // namespace
+
+std::string level_reference_biases(std::vector<Run>& runs) {
+  // The slip at zero force is the same in every run (a slip offset is the runs' common effect):
+  // each run's intercept less the mean intercept, within its bound, is its reference bias.
+  std::size_t biased = 0;
+  for (const Run& r : runs) biased += r.ref_bias_bound > 0;
+  if (biased == 0 || runs.size() < 2) return {};
+  const std::vector<double> offset = intercept_offsets(runs, 0.0);
+  if (offset.empty()) return {};
+  // A time offset moves each run's intercept by its slip rate times the lag: levelled at zero
+  // lag, the biases would take the lag's signature in the linear region (a 12 ms lag on
+  // generator B's roller was fitted as 3-6 ms). The time-offset model levels at its own lag:
+  // the biases' change per second of lag is kept (ref_bias_per_lag, see predict).
+  const std::vector<double> lagged = intercept_offsets(runs, kLevellingLagProbeS);
   double largest = 0;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     Run& r = runs[k];
     if (r.ref_bias_bound <= 0) continue;
     // Levelled again after the ripple is out: the total stays within the bound.
     const double total =
-        std::clamp(r.ref_bias_removed + icpt[k] - mean, -r.ref_bias_bound, r.ref_bias_bound);
+        std::clamp(r.ref_bias_removed + offset[k], -r.ref_bias_bound, r.ref_bias_bound);
     for (double& x : r.slip) x -= total - r.ref_bias_removed;
     r.ref_bias_removed = total;
+    r.ref_bias_per_lag = lagged.empty() ? 0.0 : (lagged[k] - offset[k]) / kLevellingLagProbeS;
     largest = std::max(largest, std::abs(total));
   }
   return fmt::format(

@@ -239,6 +239,12 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   if (slip_offset != 0)
     for (double& s : slip) s -= slip_offset;
   if (dt_s != 0) {
+    // Levelled at this lag, not at none (level_reference_biases): the run's bias moves.
+    if (r.ref_bias_bound > 0 && r.ref_bias_per_lag != 0) {
+      const double at_lag = std::clamp(r.ref_bias_removed + r.ref_bias_per_lag * dt_s,
+                                       -r.ref_bias_bound, r.ref_bias_bound);
+      for (double& s : slip) s += r.ref_bias_removed - at_lag;
+    }
     std::vector<double> shifted(n);
     const double s0 = slip.front(), t0 = r.t_s.front();
     for (std::size_t i = 0; i < n; ++i) {
