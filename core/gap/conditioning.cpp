@@ -412,16 +412,16 @@ std::string level_reference_biases(std::vector<Run>& runs) {
   if (offset.empty()) return {};
   // A time offset moves each run's intercept by its slip rate times the lag: levelled at zero
   // lag, the biases would take the lag's signature in the linear region (a 12 ms lag on
-  // generator B's roller was fitted as 3-6 ms). The time-offset model levels at its own lag:
-  // the biases' change per second of lag is kept (ref_bias_per_lag, see predict).
+  // generator B's roller was fitted as 3-6 ms). The lag models level at their own lag: the
+  // biases' change per second of lag is kept (ref_bias_per_lag, see predict).
   const std::vector<double> lagged = intercept_offsets(runs, kLevellingLagProbeS);
   double largest = 0;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     Run& r = runs[k];
     if (r.ref_bias_bound <= 0) continue;
     // Levelled again after the ripple is out: the total stays within the bound.
-    const double total =
-        std::clamp(r.ref_bias_removed + offset[k], -r.ref_bias_bound, r.ref_bias_bound);
+    r.ref_bias_wanted = r.ref_bias_removed + offset[k];
+    const double total = std::clamp(r.ref_bias_wanted, -r.ref_bias_bound, r.ref_bias_bound);
     for (double& x : r.slip) x -= total - r.ref_bias_removed;
     r.ref_bias_removed = total;
     r.ref_bias_per_lag = lagged.empty() ? 0.0 : (lagged[k] - offset[k]) / kLevellingLagProbeS;

@@ -226,25 +226,30 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
     }
   }
   std::vector<double> slip = r.slip;
+  // A lag (time offset; relaxation, sigma / V at the run's speed) levels the runs' reference
+  // biases at itself, not at none (level_reference_biases): the run's bias moves by level_shift.
+  double level_shift = 0;
+  if (r.ref_bias_bound > 0 && r.ref_bias_per_lag != 0 && (dt_s != 0 || relaxation)) {
+    double v_mps = 0;
+    for (double v : r.v_ref_mps) v_mps += v / static_cast<double>(n);
+    const double lag_s = dt_s + (relaxation ? sigma_m / std::max(v_mps, 0.1) : 0.0);
+    level_shift = r.ref_bias_removed - std::clamp(r.ref_bias_wanted + r.ref_bias_per_lag * lag_s,
+                                                  -r.ref_bias_bound, r.ref_bias_bound);
+    for (double& s : slip) s += level_shift;
+  }
   if (relaxation) {
     // Initial transient slip: the one whose force (linear region) is the measured initial force.
     const double stiffness_n = p[0] * p[1] * p[2] * d_scale[0] * b_scale[0];
     const double k0 =
         stiffness_n > 0 ? (r.initial_force_n - add[0] - std::min(threshold_n, r.initial_force_n)) /
                                   stiffness_n +
-                              slip_offset
+                              slip_offset + level_shift
                         : slip.front();
     slip = relax(r, slip, sigma_m, k0);
   }
   if (slip_offset != 0)
     for (double& s : slip) s -= slip_offset;
   if (dt_s != 0) {
-    // Levelled at this lag, not at none (level_reference_biases): the run's bias moves.
-    if (r.ref_bias_bound > 0 && r.ref_bias_per_lag != 0) {
-      const double at_lag = std::clamp(r.ref_bias_removed + r.ref_bias_per_lag * dt_s,
-                                       -r.ref_bias_bound, r.ref_bias_bound);
-      for (double& s : slip) s += r.ref_bias_removed - at_lag;
-    }
     std::vector<double> shifted(n);
     const double s0 = slip.front(), t0 = r.t_s.front();
     for (std::size_t i = 0; i < n; ++i) {

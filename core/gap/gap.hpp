@@ -99,9 +99,10 @@ struct Run {
   /// a step: a slip bias of up to this much, its own in every run (0: not such a channel).
   double ref_bias_bound = 0.0;
   double ref_bias_removed = 0.0;  ///< the bias taken out (level_reference_biases)
-  /// How that bias moves per second of a time offset (levelled at the lag, the slip compared
-  /// with the force is taken earlier): the time-offset model levels at its own lag.
-  double ref_bias_per_lag = 0.0;
+  /// The bias the levelling wanted before its bound (the intercept's offset), and how that moves
+  /// per second of a lag (levelled at the lag, the slip compared with the force is taken
+  /// earlier): the lag models (time offset, relaxation at one speed) level at their own lag.
+  double ref_bias_wanted = 0.0, ref_bias_per_lag = 0.0;
   /// Slip rate at the start of the run (least squares over its first 40 ms, full rate): before
   /// the event the slip is taken as the ramp from zero at this rate (time offset).
   double initial_slip_rate_per_s = 0.0;

@@ -128,12 +128,14 @@ TEST(SecondSim, ALagOnAQuantisedRollerIsNotLevelledAway) {
   // A 12 ms late pressure channel on generator B's roller, whose reference is read through a
   // quantised channel: a lag moves each run's intercept at zero force by its slip rate, and the
   // runs' levelling (made for the reference's quantisation) took it: fitted as 4.2-4.6 ms, the
-  // verdict unexplained. The time-offset model levels at its own lag.
+  // verdict unexplained. The lag models level at their own lag.
   for (std::uint64_t seed : {2u, 3u, 5u}) {
     const sim::Injection inj{"time_offset", 0.012, gap::Condition::Roller, sim::Generator::B};
     const auto t = sim::run_trial(inj, seed, gap::calibrated_options(gap::Condition::Roller));
     ASSERT_FALSE(t.verdict.empty());
-    EXPECT_EQ(t.verdict.front(), "time_offset") << "seed " << seed;
+    // At one roller speed a lag is a lag: relaxation (sigma / V) may come first with a note
+    // that the data cannot separate them (seed 5: 16 mm at 1.39 m/s, 11.5 ms).
+    EXPECT_TRUE(t.correct()) << "seed " << seed << " said " << t.verdict.front();
     EXPECT_NEAR(t.estimate, 0.012, 0.15 * 0.012) << "seed " << seed;
   }
 }
