@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <optional>
+#include <utility>
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
@@ -40,6 +41,30 @@ struct RippleFit {
   double ssr = 0;                  ///< residual sum of squares of the regression
 };
 
+/// An encoder's ripple columns: K (1 - s) cos and sin of its angle (times frequency_scale), the
+/// reference's with the opposite sign. The ripple is in the slip, the residual in the force: a
+/// filtered force channel shows the model's image of it through the same filter (at 15 Hz, a
+/// fifth wheel at 70 km/h, a 19 ms filter passes half of it, 60 degrees late): the columns go
+/// through it too.
+std::pair<std::vector<double>, std::vector<double>> ripple_columns(const Run& r,
+                                                                   const std::vector<double>& gain,
+                                                                   std::size_t e,
+                                                                   double frequency_scale) {
+  const std::size_t n = r.t_s.size();
+  const double sign = e == 0 ? 1.0 : -1.0;
+  std::vector<double> cos_col(n), sin_col(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ang = frequency_scale * (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
+    cos_col[i] = sign * gain[i] * std::cos(ang);
+    sin_col[i] = sign * gain[i] * std::sin(ang);
+  }
+  if (r.pressure_filter_s > 0) {
+    filter_first_order(r.t_s, cos_col, r.pressure_filter_s, cos_col.front());
+    filter_first_order(r.t_s, sin_col, r.pressure_filter_s, sin_col.front());
+  }
+  return {std::move(cos_col), std::move(sin_col)};
+}
+
 /// Regresses the residual y on a polynomial trend in time (order trend, kept out of the ripple)
 /// and K (1 - s) cos/sin of the encoders' angles (the reference's with the opposite sign).
 RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vector<double>& gain,
@@ -59,23 +84,10 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vect
     for (int k = 0; k <= trend; ++k, p *= u) a(row, k) = p;
     b(row) = y[i];
   }
-  // The ripple is in the slip, the residual in the force: a filtered force channel shows the
-  // model's image of it through the same filter (at 15 Hz, a fifth wheel at 70 km/h, a 19 ms
-  // filter passes half of it, 60 degrees late): the columns go through it too.
   Eigen::Index c = trend + 1;
   for (std::size_t e = 0; e < 2; ++e) {
     if (!use[e]) continue;
-    const double sign = e == 0 ? 1.0 : -1.0;
-    std::vector<double> cos_col(n), sin_col(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const double ang = frequency_scale[e] * (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
-      cos_col[i] = sign * gain[i] * std::cos(ang);
-      sin_col[i] = sign * gain[i] * std::sin(ang);
-    }
-    if (r.pressure_filter_s > 0) {
-      filter_first_order(r.t_s, cos_col, r.pressure_filter_s, cos_col.front());
-      filter_first_order(r.t_s, sin_col, r.pressure_filter_s, sin_col.front());
-    }
+    const auto [cos_col, sin_col] = ripple_columns(r, gain, e, frequency_scale[e]);
     for (std::size_t i = 0; i < n; ++i) {
       a(static_cast<Eigen::Index>(i), c) = cos_col[i];
       a(static_cast<Eigen::Index>(i), c + 1) = sin_col[i];
@@ -107,22 +119,10 @@ std::optional<std::array<double, 2>> scan_phase(const Run& r, const std::vector<
                                                 const std::vector<double>& gain, std::size_t e,
                                                 double amplitude) {
   const std::size_t n = r.t_s.size();
-  std::array<bool, 2> use{};
-  use[e] = true;
   // The free fit's columns, residualised on the trend: SSR(c, s) is then a quadratic form.
   Eigen::MatrixXd trend(static_cast<Eigen::Index>(n), 2), cols(static_cast<Eigen::Index>(n), 3);
   const double t_end = std::max(r.t_s.back(), 1e-6);
-  const double sign = e == 0 ? 1.0 : -1.0;
-  std::vector<double> cos_col(n), sin_col(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double ang = e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i];
-    cos_col[i] = sign * gain[i] * std::cos(ang);
-    sin_col[i] = sign * gain[i] * std::sin(ang);
-  }
-  if (r.pressure_filter_s > 0) {
-    filter_first_order(r.t_s, cos_col, r.pressure_filter_s, cos_col.front());
-    filter_first_order(r.t_s, sin_col, r.pressure_filter_s, sin_col.front());
-  }
+  const auto [cos_col, sin_col] = ripple_columns(r, gain, e, 1.0);
   for (std::size_t i = 0; i < n; ++i) {
     const auto row = static_cast<Eigen::Index>(i);
     trend(row, 0) = 1;
