@@ -92,15 +92,19 @@ sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Genera
     for (const auto& g : per) {
       gates.null_best_gain.push_back(g.null_best_gain.front());
       gates.null_best_delta_bic.push_back(g.null_best_delta_bic.front());
+      gates.null_gap_over_floor.push_back(g.null_gap_over_floor.front());
     }
     sim::set_gates(gates);
   }
   std::cerr << fmt::format(
       "[{}] null best-candidate gain: median {:.3f}, max {:.3f}; best dBIC min {:.1f}; gates: "
-      "gain >= {:.3f}, dBIC <= -{:.1f} (shipped: {:.3f}, -{:.1f})\n",
+      "gain >= {:.3f}, dBIC <= -{:.1f} (shipped: {:.3f}, -{:.1f}); null gap / floor: median "
+      "{:.2f}, max {:.2f}, fit-quality factor {:.2f}\n",
       cname, quantile(gates.null_best_gain, 0.5), quantile(gates.null_best_gain, 1.0),
       quantile(gates.null_best_delta_bic, 0.0), gates.options.gate_gain, gates.options.bic_margin,
-      gap::calibrated_options(c).gate_gain, gap::calibrated_options(c).bic_margin);
+      gap::calibrated_options(c).gate_gain, gap::calibrated_options(c).bic_margin,
+      quantile(gates.null_gap_over_floor, 0.5), quantile(gates.null_gap_over_floor, 1.0),
+      gates.options.noise_factor);
   return gates;
 }
 

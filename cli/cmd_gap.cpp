@@ -46,7 +46,9 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
       model_hash.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(model_hash);
   j["mode"] = mode;
   j["condition"] = gap::to_string(condition);
-  j["gates"] = {{"gain", num(gates.gate_gain)}, {"bic_margin", num(gates.bic_margin)}};
+  j["gates"] = {{"gain", num(gates.gate_gain)},
+                {"bic_margin", num(gates.bic_margin)},
+                {"fit_quality_factor", num(gates.noise_factor)}};
   j["runs"] = nlohmann::ordered_json::array();
   for (const auto& run : runs) j["runs"].push_back(run.name);
   j["left_out"] = left_out_json(left_out);
@@ -222,6 +224,7 @@ void add_gap_command(CLI::App& app) {
     bool json = false;
     RunOptions run;
     double gate_gain = NAN, bic_margin = NAN;  ///< NaN: the calibrated gate of the condition
+    double fit_quality_factor = NAN;           ///< NaN: the condition's (1.5)
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand(
@@ -244,6 +247,10 @@ void add_gap_command(CLI::App& app) {
                   "null data of the condition: roller, ground or roller vs road)");
   cmd->add_option("--bic-margin", o->bic_margin,
                   "minimum BIC decrease to accept an effect (default: calibrated, as the gain)");
+  cmd->add_option("--fit-quality-factor", o->fit_quality_factor,
+                  "a held-out gap above this x the noise floor is `unexplained` (default 1.5; "
+                  "bench/gap_referee calibrates it on null data, as the gates)")
+      ->check(CLI::PositiveNumber);
   cmd->callback([o] {
     const Model model = load_model(resolve_model_path(o->model));
     o->run.pipeline.fit = false;
@@ -314,8 +321,11 @@ void add_gap_command(CLI::App& app) {
     gap::Options gap_options = gap::calibrated_options(condition);
     if (std::isfinite(o->gate_gain)) gap_options.gate_gain = o->gate_gain;
     if (std::isfinite(o->bic_margin)) gap_options.bic_margin = o->bic_margin;
-    spdlog::info("gap: condition {}, gates: held-out gain >= {:.3f}, BIC drop >= {:.1f}",
-                 gap::to_string(condition), gap_options.gate_gain, gap_options.bic_margin);
+    if (std::isfinite(o->fit_quality_factor)) gap_options.noise_factor = o->fit_quality_factor;
+    spdlog::info("gap: condition {}, gates: held-out gain >= {:.3f}, BIC drop >= {:.1f}, "
+                 "fit-quality factor {:.2f}",
+                 gap::to_string(condition), gap_options.gate_gain, gap_options.bic_margin,
+                 gap_options.noise_factor);
     const gap::Report rep =
         transfer ? gap::diagnose_transfer(roller_runs, runs, seed.params, gap_options)
                  : gap::diagnose(runs, seed.params, gap_options);

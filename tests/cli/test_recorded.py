@@ -305,6 +305,7 @@ class Gap(unittest.TestCase):
             # effects is near the force noise (measured 3.9 N against 3.2 N).
             self.assertEqual(doc["condition"], "roller")
             self.assertGreaterEqual(doc["gates"]["gain"], 0.1)
+            self.assertEqual(doc["gates"]["fit_quality_factor"], 1.5)  # the default
             self.assertLess(doc["gap_after_rmse_n"], 1.5 * doc["noise_n"])
             with open(os.path.join(d, "index.html")) as f:
                 html = f.read()

@@ -218,6 +218,25 @@ TEST(GapReferee, RollerVsRoadNamesTheTransferEffect) {
   EXPECT_EQ(null.verdict, std::vector<std::string>{"none"});
 }
 
+TEST(GapReferee, TheFitQualityFactorSitsAboveTheLargestNullGap) {
+  // A generator whose null sets leave a gap of up to 1.61x the floor (B's roller) gets a factor
+  // 10 % above it; one whose nulls sit at the floor keeps the default 1.5.
+  sim::GateCalibration g;
+  g.null_best_gain = {0.01, 0.05};
+  g.null_best_delta_bic = {-3.0, -20.0};
+  g.null_gap_over_floor = {1.02, 1.61};
+  sim::set_gates(g);
+  EXPECT_NEAR(g.options.noise_factor, 1.1 * 1.61, 1e-12);
+  EXPECT_NEAR(g.options.gate_gain, 0.10, 1e-12);  // 1.5 x 0.05 is below the floor 0.10
+  EXPECT_NEAR(g.options.bic_margin, 30.0, 1e-12);
+  sim::GateCalibration clean;
+  clean.null_best_gain = {0.01};
+  clean.null_best_delta_bic = {-1.0};
+  clean.null_gap_over_floor = {1.1};
+  sim::set_gates(clean);
+  EXPECT_EQ(clean.options.noise_factor, gap::Options{}.noise_factor);
+}
+
 TEST(GapReferee, ShippedGatesSitAboveEveryNullScoreAndDrawsCoverNone) {
   for (auto c : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad}) {
     const auto g = sim::calibrate_gates(c, 2, 1'000'000, gap::Options{});
@@ -226,6 +245,8 @@ TEST(GapReferee, ShippedGatesSitAboveEveryNullScoreAndDrawsCoverNone) {
     for (double x : g.null_best_gain) EXPECT_GT(shipped.gate_gain, x) << gap::to_string(c);
     for (double x : g.null_best_delta_bic)
       EXPECT_LT(-shipped.bic_margin, x) << gap::to_string(c);  // not accepted
+    ASSERT_EQ(g.null_gap_over_floor.size(), 2u);  // the shipped fit-quality factor holds them
+    for (double x : g.null_gap_over_floor) EXPECT_GT(shipped.noise_factor, x) << gap::to_string(c);
   }
   Rng rng(5);
   int none = 0;
