@@ -340,10 +340,9 @@ void set_gates(GateCalibration& g) {
   // leaves a null gap of up to 1.6-2.2x the noise floor on generator B: with the fixed 1.5x its
   // null sets and weak effects said `unexplained`. The floor itself stays the noise's.
   if (!g.null_gap_over_floor.empty())
-    g.options.noise_factor =
-        std::max(g.options.noise_factor,
-                 kNullGapMargin * *std::max_element(g.null_gap_over_floor.begin(),
-                                                    g.null_gap_over_floor.end()));
+    g.options.noise_factor = std::max(
+        g.options.noise_factor, kNullGapMargin * *std::max_element(g.null_gap_over_floor.begin(),
+                                                                   g.null_gap_over_floor.end()));
 }
 
 }  // namespace brakefit::sim
