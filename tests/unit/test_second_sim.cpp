@@ -154,3 +154,32 @@ TEST(SecondSim, StrongEffectsOfTheSecondPhysicsAreNamed) {
     EXPECT_NEAR(t.estimate, magnitude, 0.25 * magnitude) << effect;
   }
 }
+
+TEST(SecondSim, ARelaxingTyreStartsRollingFreelyAndDoesNotRing) {
+  // The wheel has rolled freely before the pedal: it starts where the tyre's force is zero. From
+  // zero slip (MF 6.1's shifts put the force's zero a few 1e-4 off it) a 0.4 m relaxation length
+  // on B's light wheel rang at 120 Hz with +-9 % of slip through the lead and into the ramp, and
+  // the diagnosis refused the set (seed 1139: two runs without a linear region).
+  const sim2::SetDraw set =
+      sim2::draw_set(can::BenchKind::Roller, "relaxation_length", 0.3972, 1139);
+  for (const auto& run : set.runs) {
+    const auto csv = pipeline::parse_event_csv(sim2::simulate_event_csv(run), "b");
+    ASSERT_GT(csv.samples.size(), 100u);
+    // The lead before the pedal: up to 30 ms before the (filtered, late) pressure reads 0.2 bar.
+    std::int64_t pedal_ns = 0;
+    for (const auto& s : csv.samples)
+      if (s.pressure_bar > 0.2) {
+        pedal_ns = s.t_ns;
+        break;
+      }
+    double lo = 1, hi = -1;
+    for (const auto& s : csv.samples) {
+      if (s.t_ns > pedal_ns - 30'000'000) break;
+      const double slip = 1.0 - s.v_wheel_mps / s.v_ref_mps;
+      lo = std::min(lo, slip);
+      hi = std::max(hi, slip);
+    }
+    ASSERT_LE(lo, hi);
+    EXPECT_LT(hi - lo, 0.01) << "the wheel rings before the pedal";
+  }
+}
