@@ -1,6 +1,6 @@
 // Conditioning: a brake event becomes a Run for the diagnosis (signed Eq. 1 slip, channel
-// alignment, zero-phase smoothing, derivatives, noise, cuts at the runaway and a locked wheel,
-// the start state, decimation).
+// alignment, smoothing (signal.cpp), derivatives, noise, cuts at the runaway and a locked wheel,
+// the start state, decimation). The runs' reference biases are levelled in levelling.cpp.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -11,97 +11,6 @@
 #include "core/gap/internal.hpp"
 
 namespace brakefit::gap {
-
-namespace {
-
-/// The centre weights of the quadratic Savitzky-Golay filter of half window m, k = -m..m.
-std::vector<double> sg_weights(int half_window) {
-  const double m = half_window;
-  const double norm = (2 * m - 1) * (2 * m + 1) * (2 * m + 3);
-  std::vector<double> w;
-  for (int k = -half_window; k <= half_window; ++k)
-    w.push_back((3 * (3 * m * m + 3 * m - 1) - 15.0 * k * k) / norm);
-  return w;
-}
-
-}  // namespace
-
-double smoothed_noise_sd(const std::vector<double>& x, int half_window) {
-  // The difference of the smoother and one three times as wide: both keep a quadratic, so the
-  // signal cancels but for its third and higher derivatives, and the noise's share of it is
-  // known for white noise (wa.wa - 2 wa.wb + wb.wb). Scaled to the smoother's own share
-  // (wa.wa), it is the noise the smoother leaves, whatever the noise's correlation: white noise,
-  // the anti-correlated error of edge-timed frame means (consecutive frames share an edge) and
-  // the correlated error of a rebuilt staircase each count as what they leave.
-  const int wide = 3 * half_window;
-  if (half_window <= 0 || x.size() < 4 * static_cast<std::size_t>(wide) + 10) return 0.0;
-  const auto a = smooth(x, half_window), b = smooth(x, wide);
-  std::vector<double> d;
-  for (std::size_t i = static_cast<std::size_t>(wide);
-       i + static_cast<std::size_t>(wide) < x.size(); ++i)
-    d.push_back(a[i] - b[i]);
-  std::vector<double> dev = d;
-  std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
-  const double med = dev[dev.size() / 2];
-  for (double& v : dev) v = std::abs(v - med);
-  std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
-  const double sd_d = dev[dev.size() / 2] / 0.6745;
-  const auto wa = sg_weights(half_window), wb = sg_weights(wide);
-  double aa = 0, ab = 0, bb = 0;
-  for (double w : wa) aa += w * w;
-  for (double w : wb) bb += w * w;
-  for (std::size_t k = 0; k < wa.size(); ++k)  // wa's k-th weight sits at wide - half_window + k
-    ab += wa[k] * wb[k + static_cast<std::size_t>(wide - half_window)];
-  return sd_d * std::sqrt(aa / std::max(aa - 2 * ab + bb, 1e-12));
-}
-
-std::vector<double> smooth(const std::vector<double>& x, int hw) {
-  // Zero-phase Savitzky-Golay (quadratic, centred, no lag; the window shrinks at the ends). A
-  // moving average would bias the slip where it curves: near the peak of a 250 bar/s stop the
-  // slip accelerates within the window.
-  std::vector<double> y(x.size());
-  const auto n = static_cast<long>(x.size());
-  for (long i = 0; i < n; ++i) {
-    const long w = std::min<long>({hw, i, n - 1 - i});
-    if (w == 0) {
-      y[static_cast<std::size_t>(i)] = x[static_cast<std::size_t>(i)];
-      continue;
-    }
-    const double m = static_cast<double>(w);
-    const double norm = (2 * m - 1) * (2 * m + 1) * (2 * m + 3);
-    double s = 0;
-    for (long k = -w; k <= w; ++k) {
-      const double kk = static_cast<double>(k);
-      s += (3 * (3 * m * m + 3 * m - 1) - 15 * kk * kk) / norm * x[static_cast<std::size_t>(i + k)];
-    }
-    y[static_cast<std::size_t>(i)] = s;
-  }
-  return y;
-}
-
-std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x) {
-  std::vector<double> d(x.size(), 0.0);
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const std::size_t a = i == 0 ? 0 : i - 1, b = std::min(i + 1, x.size() - 1);
-    if (t[b] > t[a]) d[i] = (x[b] - x[a]) / (t[b] - t[a]);
-  }
-  return d;
-}
-
-double interp(const std::vector<double>& t, const std::vector<double>& x, double at) {
-  if (at <= t.front()) return x.front();
-  if (at >= t.back()) return x.back();
-  const auto j = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), at) - t.begin());
-  const double u = (at - t[j - 1]) / (t[j] - t[j - 1]);
-  return x[j - 1] + u * (x[j] - x[j - 1]);
-}
-
-double smoothing_noise_gain(int half_window) {
-  // The centre weights of the quadratic Savitzky-Golay filter: sqrt(sum w^2) = sqrt(w0).
-  if (half_window <= 0) return 1.0;
-  const double m = half_window;
-  return std::sqrt(3 * (3 * m * m + 3 * m - 1) / ((2 * m - 1) * (2 * m + 1) * (2 * m + 3)));
-}
 
 namespace {
 
@@ -345,93 +254,6 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     r.pressure_rate_bar_per_s.push_back(full.pressure_rate_bar_per_s[i]);
   }
   return r;
-}
-
-namespace {
-
-/// Each run's intercept at zero force less the runs' mean: a line of common slope with an
-/// intercept per run through the linear region (5-30 % of the largest force), the slip taken
-/// lag_s earlier than the force (and the declared filter's tau: a filtered force channel shows
-/// the linear region's force of tau earlier, else each ramp rate would level to its own lag).
-/// Empty when a run has too little of the linear region.
-std::vector<double> intercept_offsets(const std::vector<Run>& runs, double lag_s) {
-  double peak = 0;
-  for (const Run& r : runs)
-    for (double f : r.force_n) peak = std::max(peak, f);
-  std::vector<double> mf(runs.size()), ms(runs.size());
-  std::vector<std::vector<double>> slips;
-  for (const Run& r : runs) {
-    std::vector<double> s = r.slip;
-    if (const double back = r.pressure_filter_s + lag_s; back != 0)
-      for (std::size_t i = 0; i < s.size(); ++i)
-        s[i] = interp(r.t_s, r.slip, std::max(r.t_s.front(), r.t_s[i] - back));
-    slips.push_back(std::move(s));
-  }
-  double sff = 0, sfs = 0;
-  for (std::size_t k = 0; k < runs.size(); ++k) {
-    const Run& r = runs[k];
-    const std::vector<double>& slip = slips[k];
-    double n = 0;
-    for (std::size_t i = 0; i < r.slip.size(); ++i)
-      if (r.force_n[i] >= 0.05 * peak && r.force_n[i] <= 0.3 * peak) {
-        mf[k] += r.force_n[i];
-        ms[k] += slip[i];
-        ++n;
-      }
-    if (n < 5) return {};
-    mf[k] /= n;
-    ms[k] /= n;
-    for (std::size_t i = 0; i < r.slip.size(); ++i)
-      if (r.force_n[i] >= 0.05 * peak && r.force_n[i] <= 0.3 * peak) {
-        sff += (r.force_n[i] - mf[k]) * (r.force_n[i] - mf[k]);
-        sfs += (r.force_n[i] - mf[k]) * (slip[i] - ms[k]);
-      }
-  }
-  if (!(sff > 0)) return {};
-  const double slope = sfs / sff;  // slip per newton
-  std::vector<double> icpt(runs.size());
-  double mean = 0;
-  for (std::size_t k = 0; k < runs.size(); ++k) mean += icpt[k] = ms[k] - slope * mf[k];
-  mean /= static_cast<double>(runs.size());
-  for (double& x : icpt) x -= mean;
-  return icpt;
-}
-
-/// The lag at which the levelling's sensitivity to a time offset is measured.
-constexpr double kLevellingLagProbeS = 0.01;
-
-}  // namespace
-
-std::string level_reference_biases(std::vector<Run>& runs) {
-  // The slip at zero force is the same in every run (a slip offset is the runs' common effect):
-  // each run's intercept less the mean intercept, within its bound, is its reference bias.
-  std::size_t biased = 0;
-  for (const Run& r : runs) biased += r.ref_bias_bound > 0;
-  if (biased == 0 || runs.size() < 2) return {};
-  const std::vector<double> offset = intercept_offsets(runs, 0.0);
-  if (offset.empty()) return {};
-  // A time offset moves each run's intercept by its slip rate times the lag: levelled at zero
-  // lag, the biases would take the lag's signature in the linear region (a 12 ms lag on
-  // generator B's roller was fitted as 3-6 ms). The lag models level at their own lag: the
-  // biases' change per second of lag is kept (ref_bias_per_lag, see predict).
-  const std::vector<double> lagged = intercept_offsets(runs, kLevellingLagProbeS);
-  double largest = 0;
-  for (std::size_t k = 0; k < runs.size(); ++k) {
-    Run& r = runs[k];
-    if (r.ref_bias_bound <= 0) continue;
-    // Levelled again after the ripple is out: the total stays within the bound.
-    r.ref_bias_wanted = r.ref_bias_removed + offset[k];
-    const double total = std::clamp(r.ref_bias_wanted, -r.ref_bias_bound, r.ref_bias_bound);
-    for (double& x : r.slip) x -= total - r.ref_bias_removed;
-    r.ref_bias_removed = total;
-    r.ref_bias_per_lag = lagged.empty() ? 0.0 : (lagged[k] - offset[k]) / kLevellingLagProbeS;
-    largest = std::max(largest, std::abs(total));
-  }
-  return fmt::format(
-      "the reference speed was constant and quantised (a roller read at {:.2g} m/s resolution): "
-      "each run's slip is off by up to half a step of it ({:.2g}); the runs' slips were levelled "
-      "at zero force (largest correction {:.2g})",
-      runs.front().v_ref_step_mps, runs.front().ref_bias_bound, largest);
 }
 
 }  // namespace brakefit::gap

@@ -1,0 +1,100 @@
+// Levelling: the runs' slip biases from a constant quantised reference (a roller held at one
+// speed, read in steps) are taken from their intercepts at zero force; each lag model levels at
+// its own lag (Run::ref_bias_per_lag).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/gap/internal.hpp"
+
+namespace brakefit::gap {
+
+namespace {
+
+/// Each run's intercept at zero force less the runs' mean: a line of common slope with an
+/// intercept per run through the linear region (5-30 % of the largest force), the slip taken
+/// lag_s earlier than the force (and the declared filter's tau: a filtered force channel shows
+/// the linear region's force of tau earlier, else each ramp rate would level to its own lag).
+/// Empty when a run has too little of the linear region.
+std::vector<double> intercept_offsets(const std::vector<Run>& runs, double lag_s) {
+  double peak = 0;
+  for (const Run& r : runs)
+    for (double f : r.force_n) peak = std::max(peak, f);
+  std::vector<double> mf(runs.size()), ms(runs.size());
+  std::vector<std::vector<double>> slips;
+  for (const Run& r : runs) {
+    std::vector<double> s = r.slip;
+    if (const double back = r.pressure_filter_s + lag_s; back != 0)
+      for (std::size_t i = 0; i < s.size(); ++i)
+        s[i] = interp(r.t_s, r.slip, std::max(r.t_s.front(), r.t_s[i] - back));
+    slips.push_back(std::move(s));
+  }
+  double sff = 0, sfs = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const Run& r = runs[k];
+    const std::vector<double>& slip = slips[k];
+    double n = 0;
+    for (std::size_t i = 0; i < r.slip.size(); ++i)
+      if (r.force_n[i] >= 0.05 * peak && r.force_n[i] <= 0.3 * peak) {
+        mf[k] += r.force_n[i];
+        ms[k] += slip[i];
+        ++n;
+      }
+    if (n < 5) return {};
+    mf[k] /= n;
+    ms[k] /= n;
+    for (std::size_t i = 0; i < r.slip.size(); ++i)
+      if (r.force_n[i] >= 0.05 * peak && r.force_n[i] <= 0.3 * peak) {
+        sff += (r.force_n[i] - mf[k]) * (r.force_n[i] - mf[k]);
+        sfs += (r.force_n[i] - mf[k]) * (slip[i] - ms[k]);
+      }
+  }
+  if (!(sff > 0)) return {};
+  const double slope = sfs / sff;  // slip per newton
+  std::vector<double> icpt(runs.size());
+  double mean = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) mean += icpt[k] = ms[k] - slope * mf[k];
+  mean /= static_cast<double>(runs.size());
+  for (double& x : icpt) x -= mean;
+  return icpt;
+}
+
+/// The lag at which the levelling's sensitivity to a time offset is measured.
+constexpr double kLevellingLagProbeS = 0.01;
+
+}  // namespace
+
+std::string level_reference_biases(std::vector<Run>& runs) {
+  // The slip at zero force is the same in every run (a slip offset is the runs' common effect):
+  // each run's intercept less the mean intercept, within its bound, is its reference bias.
+  std::size_t biased = 0;
+  for (const Run& r : runs) biased += r.ref_bias_bound > 0;
+  if (biased == 0 || runs.size() < 2) return {};
+  const std::vector<double> offset = intercept_offsets(runs, 0.0);
+  if (offset.empty()) return {};
+  // A time offset moves each run's intercept by its slip rate times the lag: levelled at zero
+  // lag, the biases would take the lag's signature in the linear region (a 12 ms lag on
+  // generator B's roller was fitted as 3-6 ms). The lag models level at their own lag: the
+  // biases' change per second of lag is kept (ref_bias_per_lag, see predict).
+  const std::vector<double> lagged = intercept_offsets(runs, kLevellingLagProbeS);
+  double largest = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    Run& r = runs[k];
+    if (r.ref_bias_bound <= 0) continue;
+    // Levelled again after the ripple is out: the total stays within the bound.
+    r.ref_bias_wanted = r.ref_bias_removed + offset[k];
+    const double total = std::clamp(r.ref_bias_wanted, -r.ref_bias_bound, r.ref_bias_bound);
+    for (double& x : r.slip) x -= total - r.ref_bias_removed;
+    r.ref_bias_removed = total;
+    r.ref_bias_per_lag = lagged.empty() ? 0.0 : (lagged[k] - offset[k]) / kLevellingLagProbeS;
+    largest = std::max(largest, std::abs(total));
+  }
+  return fmt::format(
+      "the reference speed was constant and quantised (a roller read at {:.2g} m/s resolution): "
+      "each run's slip is off by up to half a step of it ({:.2g}); the runs' slips were levelled "
+      "at zero force (largest correction {:.2g})",
+      runs.front().v_ref_step_mps, runs.front().ref_bias_bound, largest);
+}
+
+}  // namespace brakefit::gap
