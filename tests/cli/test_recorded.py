@@ -1,14 +1,12 @@
-"""Recorded tests: simulate, replay, export, compare, and candump compatibility with can-utils."""
+"""Recorded tests: simulate, replay, export, compare, candump compatibility with can-utils, the
+README tour and fits at a bound (gap through the CLI: test_gap_cli.py)."""
 import glob
 import json
-import math
 import os
-import random
 import shutil
 import subprocess
 import tempfile
 import unittest
-import xml.etree.ElementTree as ET
 
 from test_cli import BIN, ROOT, run, svg_series, write
 
@@ -200,194 +198,6 @@ class CanUtilsCompatibility(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
 
 
-if __name__ == "__main__":
-    unittest.main()
-
-
-def others_roller_export(rate_bar_per_s, seed, step_mps=0.0005, last_slip=0.266, gain=66.7):
-    """A roller stop as another tester exports it (written here, not by brakefit): 1 kHz, speeds
-    quantised to 0.5 mm/s, pressure with 0.02 bar noise, no speed_timing key, and the last row
-    just short of the 27 % switch-off (the tester switched off on its own filtered slip)."""
-    B, C, D, E = 12.0, 1.6, 4000.0, 0.3
-
-    def mf(s):
-        x = B * s
-        return D * math.sin(C * math.atan(x - E * (x - math.atan(x))))
-
-    peak = max((i / 10000 for i in range(1, 5000)), key=mf)
-    rng = random.Random(seed)
-    q = lambda x: round(x / step_mps) * step_mps
-    rows = ["# bench=roller", "# wheel_radius_m=0.3", f"# brake_gain_n_per_bar={gain}",
-            "t_s,v_ref_mps,v_wheel_mps,pressure_bar"]
-    v, t_past, i = 1.3889, None, 0
-    while True:
-        t = i * 1e-3
-        p = max(0.0, rate_bar_per_s * (t - 0.2))
-        lo, hi = 0.0, peak
-        for _ in range(50):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if mf(mid) < gain * p else (lo, mid)
-        if t_past is None and gain * p >= mf(peak):
-            t_past = t
-        if t_past is not None:  # a light wheel runs away; the brake holds the tyre's force
-            lo = peak + 2.0 * (t - t_past)
-        s = min(lo, last_slip)
-        if t_past is not None:
-            p = mf(s) / gain
-        p = max(0.0, p + rng.gauss(0, 0.02))
-        rows.append(f"{t:.6f},{q(v):.6f},{q(v * (1 - s)):.6f},{p:.3f}")
-        if s >= last_slip:
-            return "\n".join(rows) + "\n"
-        i += 1
-
-
-class OthersEventFiles(unittest.TestCase):
-    """Event files brakefit did not write: each is one event, ended by its last row."""
-
-    def test_replay_and_gap_read_them_as_finished_events(self):
-        with tempfile.TemporaryDirectory() as d:
-            runs = [write(d, f"run{k}.csv", others_roller_export(rate, 7 + k))
-                    for k, rate in enumerate((10, 25, 60))]
-            idle = write(d, "idle.csv", "# bench=roller\n# wheel_radius_m=0.3\n"
-                         "t_s,v_ref_mps,v_wheel_mps,pressure_bar\n" +
-                         "".join(f"{i * 1e-3:.3f},1.389,1.389,0.000\n" for i in range(2000)))
-            r = run("replay", "--json", runs[0])
-            self.assertEqual(r.returncode, 0, r.stderr)
-            ev = json.loads(r.stdout.splitlines()[0])
-            self.assertEqual(ev["end_reason"], "end_of_file")
-            self.assertEqual(ev["flags"], [])
-            self.assertAlmostEqual(ev["max_slip_ratio"], 0.266, delta=0.002)
-            r = run("gap", "--json", *runs, idle)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            doc = json.loads(r.stdout)
-            self.assertEqual(len(doc["runs"]), 3)
-            # Nothing dropped silently: the file without an event is named, on stderr and in JSON.
-            self.assertEqual([(x["file"], x["event_id"]) for x in doc["left_out"]], [(idle, 0)])
-            self.assertIn("idle.csv", r.stderr)
-            # The floor's two parts: force noise (0.02 bar x 66.7 N/bar = 1.3 N) and the
-            # quantised speeds' slip noise through the slope.
-            self.assertAlmostEqual(doc["floor"]["force_n"], 1.33, delta=0.4)
-            self.assertGreater(doc["floor"]["slip_n"], 0.0)
-            self.assertAlmostEqual(doc["floor"]["v_wheel_step_mps"], 0.0005, delta=1e-6)
-            self.assertAlmostEqual(doc["floor"]["total_n"],
-                                   math.hypot(doc["floor"]["force_n"], doc["floor"]["slip_n"]), 6)
-            # A Magic Formula tyre with nothing else: the verdict is none, the gap at the floor.
-            self.assertEqual(doc["verdict"], ["none"])
-            self.assertLess(doc["gap_before_rmse_n"], 1.3 * doc["floor"]["total_n"])
-
-
-class Gap(unittest.TestCase):
-    def test_json_and_report_on_the_shipped_roller_runs(self):
-        with tempfile.TemporaryDirectory() as d:
-            runs = recorded("roller_2p2bar_*.log")
-            r = run("gap", "--json", "--report", d, *runs)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            doc = json.loads(r.stdout)
-            self.assertEqual(doc["schema"], "brakefit.gap/1")
-            self.assertTrue(doc["model_hash"].startswith("sha256:"))
-            self.assertIsInstance(doc["verdict"], list)
-            self.assertEqual(len(doc["runs"]), 3)
-            names = {e["name"] for e in doc["effects"]}
-            for required in ("relaxation_length", "time_offset", "wheel_inertia", "brake_threshold",
-                             "slip_offset", "load_transfer", "speed_friction"):
-                self.assertIn(required, names)
-            for e in doc["effects"]:
-                self.assertAlmostEqual(e["gain"], 1 - e["heldout_rmse_after_n"] / e["heldout_rmse_before_n"], 9)
-            # The recordings were simulated with a 0.2 m relaxation length: it is accepted first,
-            # with the right magnitude, and the gap shrinks on withheld runs.
-            self.assertEqual(doc["verdict"][0], "relaxation_length")
-            relax = next(e for e in doc["effects"] if e["name"] == "relaxation_length")
-            self.assertTrue(relax["accepted"])
-            self.assertAlmostEqual(relax["params"]["sigma_m"], 0.2, delta=0.05)
-            self.assertIn("sigma_m", doc["parameters_after"])
-            self.assertLess(doc["gap_after_rmse_n"], 0.5 * doc["gap_before_rmse_n"])
-            # Roller runs: the roller's null-calibrated gates; what is left after the accepted
-            # effects is near the force noise (measured 3.9 N against 3.2 N).
-            self.assertEqual(doc["condition"], "roller")
-            self.assertGreaterEqual(doc["gates"]["gain"], 0.1)
-            self.assertEqual(doc["gates"]["fit_quality_factor"], 1.5)  # the default
-            self.assertLess(doc["gap_after_rmse_n"], 1.5 * doc["noise_n"])
-            with open(os.path.join(d, "index.html")) as f:
-                html = f.read()
-            self.assertIn("Condition <b>roller</b>", html)
-            # The residual is cut three ways; each cut is its own group summing to 100 %.
-            for prefix, title in (("", "by slip region"), ("phase:", "by phase of the stop"),
-                                  ("run:", "by run")):
-                group = [w for w in doc["where"] if (w["region"].startswith(prefix) if prefix
-                                                     else ":" not in w["region"])]
-                self.assertAlmostEqual(sum(w["share"] for w in group), 1.0, 6, prefix)
-                self.assertIn(f"<th colspan=\"3\">{title}</th>", html)
-            for f in ("index.html", "residual.svg", "curves.svg", "gap.json"):
-                self.assertTrue(os.path.exists(os.path.join(d, f)), f)
-            self.assertEqual(len(svg_series(os.path.join(d, "residual.svg"))[1]), 3)
-
-    def test_one_run_is_not_enough(self):
-        r = run("gap", os.path.join(REC, "roller_2p2bar_fast.log"))
-        self.assertEqual(r.returncode, 65)
-        self.assertIn("at least two runs", r.stderr)
-
-    def test_runs_of_two_benches_are_refused_in_mode_1(self):
-        r = run("gap", os.path.join(REC, "roller_2p2bar_fast.log"),
-                os.path.join(REC, "ground_2p2bar_150barps.log"))
-        self.assertEqual(r.returncode, 65)
-        self.assertIn("--roller and --road", r.stderr)
-        self.assertIn("ground_2p2bar_150barps", r.stderr)
-
-    def test_a_cradle_cap_on_simulated_roller_runs_is_named_with_its_force(self):
-        # Roller runs simulated with the cradle capping the force at 3 000 N (wheel 1 kg m^2),
-        # against the shipped road runs: the verdict starts with cradle_cap and says the cap.
-        with tempfile.TemporaryDirectory() as d:
-            scen = os.path.join(d, "capped.toml")
-            with open(scen, "w") as f:
-                f.write('[scenario]\nbench = "roller"\nseed = 5\n'
-                        '[effects]\ncradle_cap_ratio = 0.789\npressure_noise_bar = 0.05\n')
-            roller = []
-            for ramp in ("slow", "medium", "fast"):
-                out = os.path.join(d, f"capped_{ramp}.log")
-                r = run("simulate", scen, "--ramp", ramp, "--out", out)
-                self.assertEqual(r.returncode, 0, r.stderr)
-                roller.append(out)
-            r = run("gap", "--json", "--report", os.path.join(d, "rep"), *roller)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            doc = json.loads(r.stdout)
-            self.assertEqual(doc["verdict"][0], "cradle_cap", doc["notes"])
-            cap = next(e for e in doc["effects"] if e["name"] == "cradle_cap")
-            self.assertAlmostEqual(cap["params"]["cap_n"], 0.789 * 3800, delta=0.05 * 3000)
-            with open(os.path.join(d, "rep", "index.html")) as f:
-                self.assertIn("cradle_cap", f.read())
-
-    def test_roller_vs_road_ranks_the_transfer_effects(self):
-        roller, road = recorded("roller_2p2bar_*.log"), recorded("ground_2p2bar_*.log")
-        r = run("gap", "--json", "--roller", *roller, "--road", *road)
-        self.assertEqual(r.returncode, 0, r.stderr)
-        doc = json.loads(r.stdout)
-        self.assertEqual(doc["schema"], "brakefit.gap/1")
-        self.assertEqual(doc["mode"], "roller_vs_road")
-        self.assertEqual(doc["condition"], "roller_vs_road")
-        # The roller runs are corrected for their own effects before their B, C, D, E travel.
-        self.assertTrue(any("corrected for their own" in n for n in doc["notes"]), doc["notes"])
-        names = {e["name"] for e in doc["effects"]}
-        for required in ("load_transfer", "speed_friction", "roller_friction"):
-            self.assertIn(required, names)
-        # Every effect says at which stage it was scored and why it was or was not accepted.
-        for e in doc["effects"]:
-            self.assertTrue(e["stage"] == "alone" or e["stage"].startswith("forward selection"))
-            self.assertTrue(e["decision"], e)
-            self.assertEqual(e["accepted"], e["decision"].startswith(("accepted", "found")), e)
-        table = run("gap", "--roller", *roller, "--road", *road).stdout
-        self.assertIn("each effect alone against the baseline:", table)
-        self.assertRegex(table, r"effect\s+parameters\s+gain\s+dBIC\s+decision")
-        # The ground runs were simulated with load transfer and a road 1/0.85 grippier than the
-        # rollers: one of those closes most of the gap on withheld road runs.
-        self.assertIn(doc["verdict"][0], ("load_transfer", "roller_friction"))
-        self.assertLess(doc["gap_after_rmse_n"], 0.3 * doc["gap_before_rmse_n"])
-        # The roller's B, C, D, E are held: parameters_before equals parameters_after's first four.
-        for k in "BCDE":
-            self.assertAlmostEqual(doc["parameters_before"][k], doc["parameters_after"][k], 9)
-        r = run("gap", "--roller", *roller)
-        self.assertEqual(r.returncode, 78)
-
-
 class ReadmeTour(unittest.TestCase):
     """Every command of the README's tour, as written, with the binaries on PATH as it says."""
 
@@ -445,3 +255,6 @@ class FitsAtABound(unittest.TestCase):
             _, series = svg_series(svg)
             self.assertTrue(any("peak beyond the data" in s for s in series), series)
 
+
+if __name__ == "__main__":
+    unittest.main()

@@ -15,7 +15,7 @@ import time
 import unittest
 
 import test_daemon
-from test_daemon import MODEL, REC, replay_reference, stored
+from daemontools import BENCH, DAEMON, MODEL, REC, replay_reference, stored
 
 
 def hold_lock(db):
@@ -214,7 +214,7 @@ class FaultTest(unittest.TestCase):
         path = os.path.join(self.tmp, "one.toml")
         with open(path, "wb") as f:
             f.write(body if isinstance(body, bytes) else body.encode())
-        return subprocess.run([test_daemon.DAEMON, "--config", path], capture_output=True,
+        return subprocess.run([DAEMON, "--config", path], capture_output=True,
                               text=True, timeout=30)
 
     def test_bad_files_at_start_exit_with_their_own_code_naming_them(self):
@@ -225,7 +225,7 @@ class FaultTest(unittest.TestCase):
         lines[10] = "(1700000000.1) can0 100#00"
         with open(bad, "w") as f:
             f.write("\n".join(lines) + "\n")
-        common = f'{test_daemon.BENCH}\n[modbus_tcp]\naddress = "127.0.0.1"\nport = 0\n'
+        common = f'{BENCH}\n[modbus_tcp]\naddress = "127.0.0.1"\nport = 0\n'
         # A replay log with one bad line: data error 65 naming FILE:LINE (not 69 "absent").
         out = self.run_daemon(f'[source]\nkind = "replay"\nfile = "{bad}"\n{common}'
                               f'[store]\npath = "{self.tmp}/e.db"\n')
@@ -250,7 +250,7 @@ class FaultTest(unittest.TestCase):
                         f'[store]\npath = "{locked}/e.db"\n')
             os.chmod(path, 0o644)
             out = subprocess.run(["setpriv", "--reuid=nobody", "--regid=nogroup", "--clear-groups",
-                                  test_daemon.DAEMON, "--config", path], capture_output=True,
+                                  DAEMON, "--config", path], capture_output=True,
                                  text=True, timeout=30)
             self.assertEqual(out.returncode, 73, out.stderr)
             self.assertIn("Permission denied", out.stderr)
