@@ -95,6 +95,9 @@ struct Run {
   /// The slip and its noise as conditioned, before the encoders' ripple was taken out: each
   /// estimate of the ripple starts from them again (remove_encoder_ripple).
   std::vector<double> slip_as_conditioned, slip_sd_as_conditioned;
+  /// The reference bias taken out when slip_as_conditioned was kept: a later levelling's change
+  /// is carried over when an estimate starts from it again.
+  double ref_bias_as_conditioned = 0.0;
   /// A constant reference speed read through a quantised channel is off its level by up to half
   /// a step: a slip bias of up to this much, its own in every run (0: not such a channel).
   double ref_bias_bound = 0.0;

@@ -87,6 +87,10 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
                     const std::vector<Effect>& candidates, const Fitter& fit, const Options& o,
                     const char* separability_note);
 
+/// The verdict from the accepted effects (nuisance terms unnamed) and the gap left after them:
+/// `none` or `unexplained` when none is named, `unexplained` appended when a gap is left.
+void name_verdict(Report& rep, const Options& o);
+
 /// The run up to its first sample whose slip (or force) is above the limit.
 Run up_to(const Run& r, const std::vector<double>& x, double limit);
 /// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole

@@ -168,8 +168,11 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     if (r.slip_as_conditioned.empty()) {
       r.slip_as_conditioned = r.slip;
       r.slip_sd_as_conditioned = r.slip_sd;
+      r.ref_bias_as_conditioned = r.ref_bias_removed;
     } else {
+      // As conditioned, with the bias levelled since (the levelling tracks what it took out).
       r.slip = r.slip_as_conditioned;
+      for (double& s : r.slip) s -= r.ref_bias_removed - r.ref_bias_as_conditioned;
       r.slip_sd = r.slip_sd_as_conditioned;
     }
   }

@@ -356,13 +356,18 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
   rep.accepted = chosen;
   rep.after = current_fit;
   rep.gap_after_rmse_n = current_heldout;
-  for (Effect e : named(chosen)) rep.verdict.push_back(to_string(e));
+  name_verdict(rep, o);
+}
+
+void name_verdict(Report& rep, const Options& o) {
+  rep.verdict.clear();
+  for (Effect e : rep.accepted)
+    if (!is_nuisance(e)) rep.verdict.push_back(to_string(e));
   const bool gap_left = rep.gap_after_rmse_n > o.noise_factor * rep.noise_n;
-  if (named(chosen).empty()) {
+  if (rep.verdict.empty())
     rep.verdict.push_back(gap_left ? "unexplained" : "none");
-  } else if (gap_left) {
+  else if (gap_left)
     rep.verdict.push_back("unexplained");
-  }
 }
 
 }  // namespace brakefit::gap
