@@ -147,6 +147,15 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   for (auto [v, cn] : {std::pair{&full.v_ref_mps, &ref_noise}, std::pair{&v_wheel, &wheel_noise}})
     if (cn->step > 0 && !(v == &full.v_ref_mps && ref_smooth))
       *v = dequantise(full.t_s, *v, cn->step);
+  // A fifth wheel's ripple is read from its own speed (the vehicle slows smoothly), not from the
+  // force residual, where it took part of an effect's bend (reference_ripple.cpp).
+  if (c.bench == can::BenchKind::Ground)
+    if (auto rr = fifth_wheel_ripple(full.t_s, full.v_ref_mps, c.fifth_wheel_radius_m);
+        rr && rr->found) {
+      full.ref_ripple_from_speed = true;
+      full.ref_ripple_amplitude = rr->amplitude;
+      full.v_ref_mps = std::move(rr->v_mps);
+    }
   // Noise of each channel: robust scale of second differences (the signal is smooth at 1 kHz;
   // first differences would count a 250 bar/s ramp, 16 N per sample, as noise), and at least
   // the quantisation's step/sqrt(12) (a slowly moving quantised signal has mostly zero
@@ -241,6 +250,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.initial_force_n = full.initial_force_n;
   r.runaway = full.runaway;
   r.runaway_force_n = full.runaway_force_n;
+  r.ref_ripple_from_speed = full.ref_ripple_from_speed;
+  r.ref_ripple_amplitude = full.ref_ripple_amplitude;
   for (std::size_t i : idx) {
     r.t_s.push_back(full.t_s[i]);
     r.slip.push_back(full.slip[i]);

@@ -101,6 +101,10 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   // (A pass that finds nothing leaves the previous one's.)
   // Levelled before as well: a run's own slip bias over a short run would be taken for part
   // of a ripple (its phase placed to cancel 8e-4 of slip, 83 N at the start of a B roller stop).
+  if (const std::string shared = share_fifth_wheel_ripple(runs); !shared.empty()) {
+    rep.notes.push_back(shared);
+    rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
+  }
   if (!level_reference_biases(runs).empty())
     rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
   std::string ripple = remove_encoder_ripple(runs, rep.before.params, rep.baseline_effects);

@@ -95,6 +95,15 @@ struct Run {
   /// The slip and its noise as conditioned, before the encoders' ripple was taken out: each
   /// estimate of the ripple starts from them again (remove_encoder_ripple).
   std::vector<double> slip_as_conditioned, slip_sd_as_conditioned;
+  /// The wheel's acceleration and the reference's deceleration as conditioned: the ripple is in
+  /// them too, as its derivative (on the ground a fifth wheel's 5e-4 at 10 Hz is 0.6 m/s^2 of
+  /// deceleration, which load transfer reads as load).
+  std::vector<double> wheel_accel_as_conditioned, ref_decel_as_conditioned;
+  /// A fifth wheel's ripple was read from its own speed (or placed there at the other runs'
+  /// amplitude) and divided out, with this amplitude: the residual's estimate of the ripple
+  /// leaves the reference alone.
+  bool ref_ripple_from_speed = false;
+  double ref_ripple_amplitude = 0.0;
   /// The reference bias taken out when slip_as_conditioned was kept: a later levelling's change
   /// is carried over when an estimate starts from it again.
   double ref_bias_as_conditioned = 0.0;

@@ -2,6 +2,7 @@
 // Helpers shared by the diagnosis's own files (conditioning, effects, fits, selection, cradle cap,
 // the two modes); not part of the public interface in gap.hpp.
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,31 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
 /// first harmonics to the staircase). Empty when the run is too short to tell them apart.
 std::vector<double> held_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
                                       double roller_radius_m);
+/// A fifth wheel's ripple is read from its own speed on runs spanning this many revolutions.
+constexpr double kReferenceRippleRevolutions = 1.5;
+/// A fifth wheel's once-per-revolution ripple read from its own speed (reference_ripple.cpp).
+struct ReferenceRipple {
+  bool found = false;
+  double amplitude = 0.0;     ///< relative speed ripple
+  double revolutions = 0.0;   ///< the fifth wheel's revolutions over the run
+  std::vector<double> v_mps;  ///< the speed with the ripple divided out (when found)
+};
+/// Fits the speed as a smooth trend (a cubic spline in the rolled angle, knots 1.5 revolutions
+/// apart) times 1 + a once-per-revolution ripple; the ripple is found when significant (3
+/// standard errors) and narrow-band (4x what the same fit explains at half or twice the rate).
+/// Nothing when the run spans fewer than kReferenceRippleRevolutions.
+std::optional<ReferenceRipple> fifth_wheel_ripple(const std::vector<double>& t_s,
+                                                  const std::vector<double>& v_mps,
+                                                  double radius_m);
+
+/// Runs whose fifth wheel's ripple was not found in their own speed (too short to tell it from
+/// the trend) take the median amplitude of those that found it and scan its phase on their
+/// speed; it is taken out of their slip and deceleration. Returns a note (empty: none).
+std::string share_fifth_wheel_ripple(std::vector<Run>& runs);
+/// Takes a reference ripple v (1 + c cos + s sin of its angle) out of a run's slip and
+/// deceleration (ripple.cpp).
+void take_out_reference_ripple(Run& r, double c, double s);
+
 /// The noise a channel keeps after the smoother (half window), measured on the channel: right
 /// for white, anti-correlated and correlated errors alike.
 double smoothed_noise_sd(const std::vector<double>& x, int half_window);

@@ -149,7 +149,58 @@ std::optional<std::array<double, 2>> scan_phase(const Run& r, const std::vector<
   return std::array<double, 2>{best_c, best_s};
 }
 
+/// d angle / dt at each point (central differences of the rolled angle, one-sided at the ends).
+std::vector<double> angle_rate(const std::vector<double>& t_s, const std::vector<double>& angle) {
+  const std::size_t n = t_s.size();
+  std::vector<double> w(n, 0.0);
+  for (std::size_t i = 0; i < n && n > 1; ++i) {
+    const std::size_t a = i == 0 ? 0 : i - 1, b = i + 1 == n ? n - 1 : i + 1;
+    w[i] = (angle[b] - angle[a]) / std::max(t_s[b] - t_s[a], 1e-9);
+  }
+  return w;
+}
+
+/// Takes a fitted ripple out of a run: a speed read as v (1 + eps(angle)) gives the slip
+/// s - (1 - s) eps_wheel + (1 - s) eps_ref, and its derivative carries v eps' (the wheel's
+/// acceleration, the reference's deceleration).
+void remove_ripple(Run& r, const RippleFit& fit) {
+  const std::size_t n = r.slip.size();
+  for (std::size_t e = 0; e < 2; ++e) {
+    if (!fit.used[e]) continue;
+    const std::vector<double>& angle = e == 0 ? r.wheel_angle_rad : r.ref_angle_rad;
+    const std::vector<double> rate = angle_rate(r.t_s, angle);
+    std::vector<double>& d = e == 0 ? r.wheel_accel_mps2 : r.ref_decel_mps2;
+    const double sign = e == 0 ? 1.0 : -1.0;  // d is +d v_wheel / dt, -d v_ref / dt
+    for (std::size_t i = 0; i < n; ++i) {
+      const double c = std::cos(angle[i]), s = std::sin(angle[i]);
+      const double eps = fit.c[e] * c + fit.s[e] * s;
+      const double eps_rate = (-fit.c[e] * s + fit.s[e] * c) * rate[i];
+      const double v_mps = e == 0 ? r.v_ref_mps[i] * (1 - r.slip[i]) : r.v_ref_mps[i];
+      if (i < d.size()) d[i] = d[i] * (1 - eps) - sign * v_mps * eps_rate;
+    }
+  }
+  // s_measured = s - (1 - s) eps_wheel + (1 - s) eps_ref: the ripple is added back.
+  for (std::size_t i = 0; i < n; ++i) {
+    double fix = 0;
+    for (std::size_t e = 0; e < 2; ++e) {
+      if (!fit.used[e]) continue;
+      const double ang = e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i];
+      const double eps = fit.c[e] * std::cos(ang) + fit.s[e] * std::sin(ang);
+      fix += (e == 0 ? 1.0 : -1.0) * (1 - r.slip[i]) * eps;
+    }
+    r.slip[i] += fix;
+  }
+}
+
 }  // namespace
+
+void take_out_reference_ripple(Run& r, double c, double s) {
+  RippleFit fit;
+  fit.used = {false, true};
+  fit.c[1] = c;
+  fit.s[1] = s;
+  remove_ripple(r, fit);
+}
 
 std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<double>& params,
                                   const std::vector<Effect>& baseline) {
@@ -162,18 +213,25 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   // Each estimate starts from the slip as conditioned, against the latest baseline (refitted on
   // the slip the previous estimate corrected): the estimates are not stacked, so a short run's
   // phase, placed once against a bent baseline, is placed again against a straighter one.
-  std::vector<std::pair<std::vector<double>, std::vector<double>>> on_entry;
+  std::vector<Run> on_entry;
+  on_entry.reserve(runs.size());
   for (Run& r : runs) {
-    on_entry.emplace_back(r.slip, r.slip_sd);
+    on_entry.push_back(r);
     if (r.slip_as_conditioned.empty()) {
       r.slip_as_conditioned = r.slip;
       r.slip_sd_as_conditioned = r.slip_sd;
+      r.wheel_accel_as_conditioned = r.wheel_accel_mps2;
+      r.ref_decel_as_conditioned = r.ref_decel_mps2;
       r.ref_bias_as_conditioned = r.ref_bias_removed;
     } else {
       // As conditioned, with the bias levelled since (the levelling tracks what it took out).
       r.slip = r.slip_as_conditioned;
       for (double& s : r.slip) s -= r.ref_bias_removed - r.ref_bias_as_conditioned;
       r.slip_sd = r.slip_sd_as_conditioned;
+      // The wheel's acceleration and the reference's deceleration stay as the previous estimate
+      // corrected them while the residual is taken: the regression's columns are the slip's
+      // ripple, and a model that reads them (wheel inertia, load transfer) must not put their
+      // ripple's derivative into the residual. They start again from as conditioned below.
     }
   }
   for (std::size_t k = 0; k < runs.size(); ++k) {
@@ -198,8 +256,9 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   std::array<std::vector<double>, 2> amps;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     if (prep[k].gain.empty()) continue;
-    const std::array<bool, 2> use{prep[k].revolutions[0] >= kMinRevolutions,
-                                  prep[k].revolutions[1] >= kMinRevolutions};
+    const std::array<bool, 2> use{
+        prep[k].revolutions[0] >= kMinRevolutions,
+        prep[k].revolutions[1] >= kMinRevolutions && !runs[k].ref_ripple_from_speed};
     if (!use[0] && !use[1]) continue;
     fits[k] = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2);
     // A ripple is narrow-band: at its encoder's revolution rate it must stand well above the
@@ -247,6 +306,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     if (prep[k].gain.empty()) continue;
     std::array<bool, 2> use{};
     for (std::size_t e = 0; e < 2; ++e) use[e] = !fits[k].used[e] && amplitude[e] > 0;
+    use[1] = use[1] && !runs[k].ref_ripple_from_speed;  // read from its own speed
     if (!use[0] && !use[1]) continue;
     const RippleFit short_fit = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 1);
     for (std::size_t e = 0; e < 2; ++e) {
@@ -275,26 +335,20 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   }
   for (std::size_t k = 0; k < runs.size(); ++k) {
     Run& r = runs[k];
+    r.wheel_accel_mps2 = r.wheel_accel_as_conditioned;
+    r.ref_decel_mps2 = r.ref_decel_as_conditioned;
     if (!fits[k].used[0] && !fits[k].used[1]) continue;
     ++corrected;
-    // s_measured = s - (1 - s) eps_wheel + (1 - s) eps_ref: the ripple is added back.
-    for (std::size_t i = 0; i < r.slip.size(); ++i) {
-      double fix = 0;
-      for (std::size_t e = 0; e < 2; ++e) {
-        if (!fits[k].used[e]) continue;
-        const double ang = e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i];
-        const double eps = fits[k].c[e] * std::cos(ang) + fits[k].s[e] * std::sin(ang);
-        fix += (e == 0 ? 1.0 : -1.0) * (1 - r.slip[i]) * eps;
-      }
-      r.slip[i] += fix;
-    }
+    remove_ripple(r, fits[k]);
   }
   if (corrected == 0 && uncorrected == 0) {
     // Nothing found this time (an estimate's narrow-band test can fail against a refitted
-    // baseline): the slips stay as the previous estimate left them.
+    // baseline): the runs stay as the previous estimate left them.
     for (std::size_t k = 0; k < runs.size(); ++k) {
-      runs[k].slip = std::move(on_entry[k].first);
-      runs[k].slip_sd = std::move(on_entry[k].second);
+      runs[k].slip = std::move(on_entry[k].slip);
+      runs[k].slip_sd = std::move(on_entry[k].slip_sd);
+      runs[k].wheel_accel_mps2 = std::move(on_entry[k].wheel_accel_mps2);
+      runs[k].ref_decel_mps2 = std::move(on_entry[k].ref_decel_mps2);
     }
     return {};
   }

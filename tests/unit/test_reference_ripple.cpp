@@ -1,0 +1,88 @@
+// A fifth wheel's once-per-revolution ripple read from its own speed (core/gap/reference_ripple),
+// and what it does for load transfer on generator B's ground runs (issue 10).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/gap/internal.hpp"
+#include "sim/referee.hpp"
+
+using namespace brakefit;
+
+namespace {
+
+/// A vehicle slowing from v0 with a deceleration ramping up at jerk_mps3, read by a fifth wheel
+/// of 0.2 m whose speed carries a ripple of amplitude `ripple` (phase 0.7 rad) and is quantised
+/// to step_mps; 1 kHz.
+struct Stop {
+  std::vector<double> t_s, v_true, v_read;
+};
+Stop stop(double v0_mps, double span_s, double ripple, double step_mps) {
+  Stop s;
+  double angle = 0, v = v0_mps;
+  for (double t = 0; t <= span_s; t += 1e-3) {
+    const double decel = std::min(25.0 * t, 9.0);
+    s.t_s.push_back(t);
+    s.v_true.push_back(v);
+    const double read = v * (1 + ripple * std::sin(angle + 0.7));
+    s.v_read.push_back(step_mps > 0 ? step_mps * std::round(read / step_mps) : read);
+    angle += v * 1e-3 / 0.2;
+    v -= decel * 1e-3;
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(ReferenceRipple, AFifthWheelsRippleIsReadFromItsOwnSpeed) {
+  for (const double v0 : {13.9, 19.4}) {
+    const Stop s = stop(v0, 0.6, 4e-4, 0.0);
+    const auto r = gap::fifth_wheel_ripple(s.t_s, s.v_read, 0.2);
+    ASSERT_TRUE(r.has_value()) << v0;
+    ASSERT_TRUE(r->found) << v0;
+    EXPECT_NEAR(r->amplitude, 4e-4, 0.4e-4) << v0;  // 7 % off at the deceleration's kink
+    double worst = 0;  // what is left of a ripple of v0 x 4e-4 (5.6-7.8 mm/s)
+    for (std::size_t i = 0; i < s.t_s.size(); ++i)
+      worst = std::max(worst, std::abs(r->v_mps[i] - s.v_true[i]));
+    EXPECT_LT(worst, 0.15 * 4e-4 * v0) << v0;
+  }
+}
+
+TEST(ReferenceRipple, NoRippleIsFoundInASmoothOrShortStop) {
+  // A vehicle slowing smoothly, read through 1 mm/s steps: no ripple.
+  for (const double v0 : {8.3, 13.9, 19.4}) {
+    const Stop s = stop(v0, 0.6, 0.0, 1e-3);
+    const auto r = gap::fifth_wheel_ripple(s.t_s, s.v_read, 0.2);
+    ASSERT_TRUE(r.has_value()) << v0;
+    // A deceleration that stops rising mid-run (13.9 m/s) is read as a ripple of 3.4e-5: the
+    // spline's misfit at the kink, under a tenth of the ripples generator B draws.
+    EXPECT_TRUE(!r->found || r->amplitude < 5e-5) << v0 << ": amplitude " << r->amplitude;
+  }
+  // Under 1.5 revolutions the speed cannot tell a ripple from its trend: not looked for.
+  const Stop s = stop(8.3, 0.2, 4e-4, 0.0);
+  EXPECT_FALSE(gap::fifth_wheel_ripple(s.t_s, s.v_read, 0.2).has_value());
+}
+
+TEST(ReferenceRipple, LoadTransferOnRunsWithARipplingFifthWheelIsNamed) {
+  // Generator B's ground runs: the other brakes work, the load follows MF 6.1's laws, and the
+  // fifth wheel ripples by up to 5e-4. Read from the force residual, the ripple took a third of
+  // load transfer's bend and its derivative (0.6 m/s^2 at 70 km/h) was read as load: 1 of 17
+  // named on the referee's draws. Read from the fifth wheel's own speed, it is named.
+  int named = 0, close = 0;
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    const sim::Injection inj{"load_transfer", 0.04, gap::Condition::Ground, sim::Generator::B};
+    const auto t = sim::run_trial(inj, seed, gap::calibrated_options(gap::Condition::Ground));
+    ASSERT_FALSE(t.verdict.empty());
+    bool read = false;
+    for (const auto& n : t.notes) read |= n.find("read from its own speed") != std::string::npos;
+    EXPECT_TRUE(read) << "seed " << seed;
+    if (t.verdict.front() != "load_transfer") continue;
+    ++named;
+    // Seed 1: 0.046 for 0.044. Seed 2 (0.054 per m/s^2) is read 38 % low and seed 3 says
+    // unexplained: the wheel's own ripple, still estimated from the force residual, takes part
+    // of the bend there.
+    if (std::abs(t.estimate - t.truth.magnitude) < 0.1 * t.truth.magnitude) ++close;
+  }
+  EXPECT_GE(named, 2);
+  EXPECT_GE(close, 1);
+}
