@@ -75,7 +75,8 @@ std::optional<ReferenceRipple> fifth_wheel_ripple(const std::vector<double>& t_s
 
 /// Runs whose fifth wheel's ripple was not found in their own speed (too short to tell it from
 /// the trend) take the median amplitude of those that found it and scan its phase on their
-/// speed; it is taken out of their slip and deceleration. Returns a note (empty: none).
+/// speed (against the same spline trend); it is taken out of their slip and deceleration. Where
+/// it cannot be placed its slip noise carries it (the floor). Returns a note (empty: none).
 std::string share_fifth_wheel_ripple(std::vector<Run>& runs);
 /// Takes a reference ripple v (1 + c cos + s sin of its angle) out of a run's slip and
 /// deceleration (ripple.cpp).

@@ -36,16 +36,13 @@ struct SpeedFit {
   double explained = 0;  ///< residual sum of squares the ripple columns remove beyond the trend
 };
 
-/// Least squares of the speed on a cubic spline in the rolled angle (truncated powers, knots
-/// kKnotRevolutions apart) and v cos, v sin of the angle times frequency_scale.
-SpeedFit fit_speed(const std::vector<double>& v, const std::vector<double>& angle,
-                   double frequency_scale) {
-  const std::size_t n = v.size();
+/// The speed's trend: a cubic spline in the rolled angle (truncated powers, knots
+/// kKnotRevolutions apart), one row per point.
+Eigen::MatrixXd trend_basis(const std::vector<double>& angle) {
+  const std::size_t n = angle.size();
   const double span = std::max(angle.back(), 1e-9);
   const int intervals = std::max(1, static_cast<int>(span / (2 * M_PI * kKnotRevolutions)));
-  const Eigen::Index trend_cols = 4 + (intervals - 1);
-  Eigen::MatrixXd a(static_cast<Eigen::Index>(n), trend_cols + 2);
-  Eigen::VectorXd b(static_cast<Eigen::Index>(n));
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(n), 4 + (intervals - 1));
   for (std::size_t i = 0; i < n; ++i) {
     const auto row = static_cast<Eigen::Index>(i);
     const double u = angle[i] / span;
@@ -57,6 +54,21 @@ SpeedFit fit_speed(const std::vector<double>& v, const std::vector<double>& angl
       const double d = std::max(0.0, u - static_cast<double>(k) / intervals);
       a(row, 3 + k) = d * d * d;
     }
+  }
+  return a;
+}
+
+/// Least squares of the speed on the trend and v cos, v sin of the angle times frequency_scale.
+SpeedFit fit_speed(const std::vector<double>& v, const std::vector<double>& angle,
+                   double frequency_scale) {
+  const std::size_t n = v.size();
+  const Eigen::MatrixXd trend = trend_basis(angle);
+  const Eigen::Index trend_cols = trend.cols();
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(n), trend_cols + 2);
+  a.leftCols(trend_cols) = trend;
+  Eigen::VectorXd b(static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto row = static_cast<Eigen::Index>(i);
     a(row, trend_cols) = v[i] * std::cos(frequency_scale * angle[i]);
     a(row, trend_cols + 1) = v[i] * std::sin(frequency_scale * angle[i]);
     b(row) = v[i];
@@ -64,7 +76,6 @@ SpeedFit fit_speed(const std::vector<double>& v, const std::vector<double>& angl
   const auto qr = a.colPivHouseholderQr();
   const Eigen::VectorXd x = qr.solve(b);
   const double ssr = (b - a * x).squaredNorm();
-  const Eigen::MatrixXd trend = a.leftCols(trend_cols);
   const double ssr_trend = (b - trend * trend.colPivHouseholderQr().solve(b)).squaredNorm();
   SpeedFit out;
   out.c = x(trend_cols);
@@ -117,13 +128,8 @@ std::string share_fifth_wheel_ripple(std::vector<Run>& runs) {
       continue;
     if (r.ref_angle_rad.back() < 2 * M_PI * kSharedRippleRevolutions) continue;
     ++looked;
-    // The phase scanned at the shared amplitude, the trend (a cubic in the angle) refitted at each.
-    const double span = std::max(r.ref_angle_rad.back(), 1e-9);
-    Eigen::MatrixXd a(static_cast<Eigen::Index>(n), 4);
-    for (std::size_t i = 0; i < n; ++i) {
-      const double u = r.ref_angle_rad[i] / span;
-      a.row(static_cast<Eigen::Index>(i)) << 1, u, u * u, u * u * u;
-    }
+    // The phase scanned at the shared amplitude, the trend refitted at each.
+    const Eigen::MatrixXd a = trend_basis(r.ref_angle_rad);
     const auto qr = a.colPivHouseholderQr();
     auto ssr = [&](double c, double s) {
       Eigen::VectorXd b(static_cast<Eigen::Index>(n));
@@ -159,8 +165,15 @@ std::string share_fifth_wheel_ripple(std::vector<Run>& runs) {
     r.ref_ripple_from_speed = true;
     ++placed;
   }
+  // Where it could not be placed it stays in the run: its slip noise carries it (amplitude /
+  // sqrt 2 of 1 - s), so the floor is honest about it, as for the residual's estimate.
   int found = 0;
-  for (const Run& r : runs) found += r.ref_ripple_amplitude > 0 ? 1 : 0;
+  for (Run& r : runs) {
+    found += r.ref_ripple_amplitude > 0 ? 1 : 0;
+    if (r.ref_ripple_amplitude > 0) continue;
+    for (std::size_t i = 0; i < r.slip_sd.size() && i < r.slip.size(); ++i)
+      r.slip_sd[i] = std::hypot(r.slip_sd[i], amp / std::sqrt(2.0) * (1 - r.slip[i]));
+  }
   std::string out = fmt::format(
       "the fifth wheel's ripple (once per revolution) was read from its own speed and taken out "
       "of the slip and the deceleration in {} of {} runs (amplitude {:.2g})",
