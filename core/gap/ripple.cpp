@@ -213,10 +213,14 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   // Each estimate starts from the slip as conditioned, against the latest baseline (refitted on
   // the slip the previous estimate corrected): the estimates are not stacked, so a short run's
   // phase, placed once against a bent baseline, is placed again against a straighter one.
-  std::vector<Run> on_entry;
+  // What each run holds on entry (restored when this estimate finds nothing).
+  struct Kept {
+    std::vector<double> slip, slip_sd, wheel_accel_mps2, ref_decel_mps2;
+  };
+  std::vector<Kept> on_entry;
   on_entry.reserve(runs.size());
   for (Run& r : runs) {
-    on_entry.push_back(r);
+    on_entry.push_back({r.slip, r.slip_sd, r.wheel_accel_mps2, r.ref_decel_mps2});
     if (r.slip_as_conditioned.empty()) {
       r.slip_as_conditioned = r.slip;
       r.slip_sd_as_conditioned = r.slip_sd;
