@@ -87,6 +87,15 @@ SpeedFit fit_speed(const std::vector<double>& v, const std::vector<double>& angl
   return out;
 }
 
+/// The speed read as v (1 + c cos + s sin of the angle), with that ripple divided out.
+std::vector<double> without_ripple(const std::vector<double>& v, const std::vector<double>& angle,
+                                   double c, double s) {
+  std::vector<double> out(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i)
+    out[i] = v[i] / (1.0 + c * std::cos(angle[i]) + s * std::sin(angle[i]));
+  return out;
+}
+
 }  // namespace
 
 std::optional<ReferenceRipple> fifth_wheel_ripple(const std::vector<double>& t_s,
@@ -107,9 +116,7 @@ std::optional<ReferenceRipple> fifth_wheel_ripple(const std::vector<double>& t_s
   out.found = out.amplitude > 3 * at.se && at.explained > kSpeedNarrowBand * neighbours &&
               out.amplitude < 0.01;
   if (!out.found) return out;
-  out.v_mps.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    out.v_mps[i] = v_mps[i] / (1.0 + at.c * std::cos(angle[i]) + at.s * std::sin(angle[i]));
+  out.v_mps = without_ripple(v_mps, angle, at.c, at.s);
   return out;
 }
 
@@ -132,10 +139,8 @@ std::string share_fifth_wheel_ripple(std::vector<Run>& runs) {
     const Eigen::MatrixXd a = trend_basis(r.ref_angle_rad);
     const auto qr = a.colPivHouseholderQr();
     auto ssr = [&](double c, double s) {
-      Eigen::VectorXd b(static_cast<Eigen::Index>(n));
-      for (std::size_t i = 0; i < n; ++i)
-        b(static_cast<Eigen::Index>(i)) = r.v_ref_mps[i] / (1.0 + c * std::cos(r.ref_angle_rad[i]) +
-                                                            s * std::sin(r.ref_angle_rad[i]));
+      const std::vector<double> v = without_ripple(r.v_ref_mps, r.ref_angle_rad, c, s);
+      const Eigen::Map<const Eigen::VectorXd> b(v.data(), static_cast<Eigen::Index>(n));
       return (b - a * qr.solve(b)).squaredNorm();
     };
     const double none = ssr(0, 0);
@@ -153,13 +158,7 @@ std::string share_fifth_wheel_ripple(std::vector<Run>& runs) {
     double ripple_sq = 0;
     for (double v : r.v_ref_mps) ripple_sq += 0.5 * amp * amp * v * v;
     if (none - best < 0.5 * ripple_sq) continue;
-    r.v_ref_mps = [&] {
-      std::vector<double> v(n);
-      for (std::size_t i = 0; i < n; ++i)
-        v[i] = r.v_ref_mps[i] / (1.0 + best_c * std::cos(r.ref_angle_rad[i]) +
-                                 best_s * std::sin(r.ref_angle_rad[i]));
-      return v;
-    }();
+    r.v_ref_mps = without_ripple(r.v_ref_mps, r.ref_angle_rad, best_c, best_s);
     take_out_reference_ripple(r, best_c, best_s);
     r.ref_ripple_amplitude = amp;
     r.ref_ripple_from_speed = true;
