@@ -52,6 +52,8 @@ constexpr double kLockSlip = 0.9;
 /// A lock-up runaway starts past the linear region: jumps below this slip are noise. (2 %: a
 /// wheel capped by the cradle below its peak runs away from there.)
 constexpr double kRunawayMinSlip = 0.02;
+/// The brake is at rest below this pressure (a lead-in starts there).
+constexpr double kRestPressureBar = 0.2;
 
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o) {
@@ -61,7 +63,20 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   full.wheel_radius_m = c.wheel_radius_m;
   full.brake_gain_n_per_bar = c.brake_gain_n_per_bar;
   std::vector<double> v_wheel, pressure;
-  for (const auto& s : e.samples) {
+  std::vector<const pipeline::Sample*> samples;
+  if (c.bench == can::BenchKind::Ground && o.lead_in_rest_s >= 0 && !e.lead_in.empty()) {
+    std::size_t rest = e.lead_in.size();  // the last sample at rest
+    while (rest > 0 && e.lead_in[rest - 1].pressure_bar > kRestPressureBar) --rest;
+    if (rest > 0) {
+      const std::int64_t from_ns =
+          e.lead_in[rest - 1].t_ns - static_cast<std::int64_t>(o.lead_in_rest_s * 1e9);
+      for (const auto& s : e.lead_in)
+        if (s.t_ns >= from_ns) samples.push_back(&s);
+    }
+  }
+  for (const auto& s : e.samples) samples.push_back(&s);
+  for (const pipeline::Sample* sp : samples) {
+    const auto& s = *sp;
     if (s.v_ref_mps < 0.3) continue;
     const double f = o.force == pipeline::ForceSource::Tester
                          ? s.force_n

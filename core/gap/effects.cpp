@@ -90,7 +90,7 @@ EffectParam effect_param(Effect e) {
     case Effect::WheelInertia:
       return {"inertia_kgm2", 0.0, 20.0, 0.5};
     case Effect::BrakeThreshold:
-      return {"p0_bar", -10.0, 30.0, 0.0};
+      return {"p0_bar", 0.0, 30.0, 1.0};  // a dead zone: the pads bite from p0 on
     case Effect::SlipOffset:
       return {"slip_offset_ratio", -0.05, 0.05, 0.0};
     case Effect::LoadTransfer:
@@ -271,7 +271,11 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
     f[i] = std::min(mf_force_n(m, slip[i]), cap_n) + add[i];
     // Brake threshold: gain p = Tb/R + gain p0 while the brake bites; below p0 the pads give no
     // torque and the measured pressure can be anything up to p0: gain min(p, p0) is added.
-    if (threshold) f[i] += std::min(threshold_n, r.force_n[i]);
+    // Behind a declared filter the pads bite when the line's pressure passes p0, not the
+    // channel's: the line's is the channel's plus tau times its rate.
+    if (threshold)
+      f[i] += std::min(threshold_n, r.force_n[i] + r.pressure_filter_s * r.brake_gain_n_per_bar *
+                                                       std::max(r.pressure_rate_bar_per_s[i], 0.0));
   }
   // The filter's state at the run's first point is what the channel showed there (a run can
   // start on the ramp, less than tau after it began: neither at rest nor settled on it).

@@ -24,19 +24,28 @@ std::optional<Event> EventDetector::feed(const Sample& s) {
   if (cur_ && static_cast<double>(s.t_ns - last_t_ns_) * 1e-9 > set_.sensor_timeout_s)
     done = close("sensor_timeout", true);
   last_t_ns_ = s.t_ns;
+  auto remember = [&] {
+    const auto window_ns = static_cast<std::int64_t>(set_.lead_in_s * 1e9);
+    before_.push_back(s);
+    while (!before_.empty() && s.t_ns - before_.front().t_ns > window_ns) before_.pop_front();
+  };
   if (!cur_ && !armed_) {
     if (s.pressure_bar < set_.release_pressure_bar) armed_ = true;
+    remember();
     return done;
   }
   if (!cur_) {
     if (s.pressure_bar >= set_.start_pressure_bar && s.v_ref_mps >= set_.min_ref_speed_mps &&
         !done) {
       cur_ = Event{};
+      cur_->lead_in.assign(before_.begin(), before_.end());
+      before_.clear();
       cur_->event_id = next_id_++;
       cur_->bench = cal_.bench;
       cur_->t_start_ns = s.t_ns;
       cur_->encoder_faults_at_start = s.encoder_faults;
     } else {
+      remember();
       return done;
     }
   }

@@ -30,6 +30,9 @@ struct EventSettings {
   /// Switch-off and lock compare the mean slip of the samples within this window (5 ms: five
   /// samples at 1 kHz) with their thresholds.
   double end_filter_s = 0.005;
+  /// The samples this long before an event's start are kept with it (Event::lead_in): the rise
+  /// from rest, which the start threshold cuts, tells a brake's dead zone from a slip offset.
+  double lead_in_s = 0.15;
 };
 
 struct Event {
@@ -44,6 +47,9 @@ struct Event {
   /// still fitted, the speeds around the loss are suspect)
   std::vector<std::string> flags;
   std::vector<Sample> samples;
+  /// The samples of the lead_in_s before the start (pressure under start_pressure_bar): for
+  /// the gap diagnosis, not fitted, not stored.
+  std::vector<Sample> lead_in;
   std::uint64_t encoder_faults_at_start = 0;
   bool fittable() const {
     for (const auto& f : flags)
@@ -82,6 +88,7 @@ class EventDetector {
   bool armed_ = true;  ///< a new event needs the pedal released first
   std::int64_t last_t_ns_ = 0;
   std::deque<std::pair<std::int64_t, double>> recent_slip_;  ///< (t_ns, slip) within end_filter_s
+  std::deque<Sample> before_;  ///< the samples of the last lead_in_s while no event runs
 };
 
 enum class ForceSource { Pressure, Tester };

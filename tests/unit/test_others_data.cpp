@@ -96,6 +96,38 @@ TEST(OthersData, OneNoisySampleAboveTheSwitchOffDoesNotEndTheStop) {
   EXPECT_EQ(done->end_reason, "switch_off_slip");
 }
 
+TEST(OthersData, AnEventKeepsTheRiseFromRestBeforeItsStart) {
+  // The detector starts at 2 bar; a brake's dead zone (the pressure rises, the wheel does not
+  // slip) lies below that. The samples of the lead_in_s before the start go with the event,
+  // apart from its samples.
+  pipeline::Calibration c;
+  pipeline::EventSettings set;
+  pipeline::EventDetector d(c, set);
+  std::optional<pipeline::Event> done;
+  std::int64_t t = 0;
+  auto feed = [&](double p) {
+    pipeline::Sample s;
+    s.t_ns = t += 1'000'000;
+    s.v_ref_mps = 8.3;
+    s.v_wheel_mps = 8.3;
+    s.pressure_bar = p;
+    return d.feed(s);
+  };
+  for (int i = 0; i < 400; ++i) ASSERT_FALSE(feed(0.0));
+  for (int i = 0; i < 19; ++i) ASSERT_FALSE(feed(0.1 * i));  // 0 .. 1.8 bar
+  for (int i = 0; i < 200; ++i) ASSERT_FALSE(feed(2.0 + 0.1 * i));
+  ASSERT_TRUE(done = feed(0.5));  // released
+  EXPECT_EQ(done->end_reason, "release");
+  ASSERT_FALSE(done->lead_in.empty());
+  EXPECT_GE(done->samples.front().pressure_bar, set.start_pressure_bar);
+  EXPECT_LT(done->lead_in.back().pressure_bar, set.start_pressure_bar);
+  EXPECT_EQ(done->lead_in.back().t_ns + 1'000'000, done->samples.front().t_ns);
+  const double span_s =
+      static_cast<double>(done->lead_in.back().t_ns - done->lead_in.front().t_ns) * 1e-9;
+  EXPECT_NEAR(span_s, set.lead_in_s, 1.5e-3);
+  EXPECT_DOUBLE_EQ(done->lead_in.front().pressure_bar, 0.0);  // from rest
+}
+
 TEST(OthersData, RepeatedStampsAreSpreadAndABackwardStampNamesItsLine) {
   const std::string head = "# bench=roller\nt_s,v_ref_mps,v_wheel_mps,pressure_bar\n";
   const auto csv = pipeline::parse_event_csv(

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "core/curve.hpp"
 #include "core/pipeline/event_csv.hpp"
@@ -153,6 +154,27 @@ TEST(SecondSim, StrongEffectsOfTheSecondPhysicsAreNamed) {
     ASSERT_FALSE(t.verdict.empty());
     EXPECT_TRUE(t.correct()) << effect << " said " << t.verdict.front();
     EXPECT_NEAR(t.estimate, magnitude, 0.25 * magnitude) << effect;
+  }
+}
+
+TEST(SecondSim, ADeadZoneIsToldFromASlipOffsetByTheRiseFromRest) {
+  // On B's ground runs a 3 bar dead zone and a slip offset are the same line in the linear
+  // region (gain (p - p0) against K (s - s0)). From 2 bar on, these threshold sets were named
+  // slip_offset (seeds 1, 5, 6) and this offset brake_threshold with p0 -6.9 bar (seed 3): the
+  // rise from rest before the event's start tells them apart (the pressure rises, the slip
+  // stays at its rest value; an offset shows at rest, with no force), and a dead zone is not
+  // negative.
+  for (const auto& [effect, magnitude, seed] :
+       std::vector<std::tuple<std::string, double, std::uint64_t>>{{"brake_threshold", 3.0, 1},
+                                                                   {"brake_threshold", 3.0, 5},
+                                                                   {"brake_threshold", 3.0, 6},
+                                                                   {"slip_offset", 0.006, 3},
+                                                                   {"slip_offset", -0.004, 1}}) {
+    const sim::Injection inj{effect, magnitude, gap::Condition::Ground, sim::Generator::B};
+    const auto t = sim::run_trial(inj, seed, gap::calibrated_options(gap::Condition::Ground));
+    ASSERT_FALSE(t.verdict.empty());
+    EXPECT_EQ(t.verdict.front(), effect) << "seed " << seed;
+    EXPECT_NEAR(t.estimate, magnitude, 0.1 * std::abs(magnitude)) << effect << " seed " << seed;
   }
 }
 
