@@ -153,8 +153,10 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       // it, fitted to the staircase.
       if (auto trend = held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
           !trend.empty()) {
-        full.v_ref_mps = std::move(trend);
+        // (The bound before the speed is replaced: lo points into the old one. Taken after it,
+        // it read freed memory and was 300 on a generator B roller set: no bound at all.)
         full.ref_bias_bound = 0.5 * q / std::max(*lo, 1e-6);
+        full.v_ref_mps = std::move(trend);
         ref_smooth = true;
       }
     }
