@@ -64,7 +64,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   full.brake_gain_n_per_bar = c.brake_gain_n_per_bar;
   std::vector<double> v_wheel, pressure;
   std::vector<const pipeline::Sample*> samples;
-  if (c.bench == can::BenchKind::Ground && o.lead_in_rest_s >= 0 && !e.lead_in.empty()) {
+  if (o.lead_in_rest_s >= 0 && !e.lead_in.empty()) {
     std::size_t rest = e.lead_in.size();  // the last sample at rest
     while (rest > 0 && e.lead_in[rest - 1].pressure_bar > kRestPressureBar) --rest;
     if (rest > 0) {
