@@ -52,7 +52,10 @@ constexpr double kLockSlip = 0.9;
 /// A lock-up runaway starts past the linear region: jumps below this slip are noise. (2 %: a
 /// wheel capped by the cradle below its peak runs away from there.)
 constexpr double kRunawayMinSlip = 0.02;
-/// The brake is at rest below this pressure (a lead-in starts there).
+/// The brake is at rest below this pressure: a run starts at the event lead-in's last sample
+/// under it (the rise from rest tells a dead zone from a slip offset). Not earlier: over 50 ms
+/// of rest a pressure channel clipped at zero reads its noise as a mean force, a dead zone of a
+/// few 0.01 bar to the fits (generator A's null BIC drops 6.7 -> 25).
 constexpr double kRestPressureBar = 0.2;
 
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
@@ -63,31 +66,24 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   full.wheel_radius_m = c.wheel_radius_m;
   full.brake_gain_n_per_bar = c.brake_gain_n_per_bar;
   std::vector<double> v_wheel, pressure;
-  std::vector<const pipeline::Sample*> samples;
-  if (o.lead_in_rest_s >= 0 && !e.lead_in.empty()) {
-    std::size_t rest = e.lead_in.size();  // the last sample at rest
-    while (rest > 0 && e.lead_in[rest - 1].pressure_bar > kRestPressureBar) --rest;
-    if (rest > 0) {
-      const std::int64_t from_ns =
-          e.lead_in[rest - 1].t_ns - static_cast<std::int64_t>(o.lead_in_rest_s * 1e9);
-      for (const auto& s : e.lead_in)
-        if (s.t_ns >= from_ns) samples.push_back(&s);
-    }
-  }
-  for (const auto& s : e.samples) samples.push_back(&s);
-  for (const pipeline::Sample* sp : samples) {
-    const auto& s = *sp;
-    if (s.v_ref_mps < 0.3) continue;
+  auto take = [&](const pipeline::Sample& s) {
+    if (s.v_ref_mps < 0.3) return;
     const double f = o.force == pipeline::ForceSource::Tester
                          ? s.force_n
                          : c.brake_gain_n_per_bar * s.pressure_bar;
-    if (!std::isfinite(f)) continue;
+    if (!std::isfinite(f)) return;
     full.t_s.push_back(static_cast<double>(s.t_ns - e.t_start_ns) * 1e-9);
     full.v_ref_mps.push_back(s.v_ref_mps);
     v_wheel.push_back(s.v_wheel_mps);
     pressure.push_back(s.pressure_bar);
     full.force_n.push_back(f);
-  }
+  };
+  // The run starts at the rise from rest: from the lead-in's last sample at rest on.
+  std::size_t rest = e.lead_in.size();
+  while (rest > 0 && e.lead_in[rest - 1].pressure_bar > kRestPressureBar) --rest;
+  for (std::size_t i = rest > 0 ? rest - 1 : e.lead_in.size(); i < e.lead_in.size(); ++i)
+    take(e.lead_in[i]);
+  for (const auto& s : e.samples) take(s);
   // The lock-up runaway: past the peak a wheel can lose speed within one or two frames. There the
   // slip is measured across a single frame and the force is dominated by the wheel's deceleration
   // (I a / R^2, a numerical derivative of a step): not quasi-static data. The run is cut where
@@ -130,11 +126,15 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   // (A roller's reference flipping between two neighbouring levels is such a channel too.)
   bool ref_smooth = false;  // the reference was read as a smooth speed (not rebuilt)
   if (const double q = std::max(ref_noise.step, wheel_noise.step); q > 0) {
-    const auto [lo, hi] = std::minmax_element(full.v_ref_mps.begin(), full.v_ref_mps.end());
-    if (*hi - *lo < (c.bench == can::BenchKind::Roller ? 1.5 : 0.5) * q) {
+    // (Values, not iterators: the speed may be replaced below. The bound once read freed memory
+    // through an iterator and was 300 on a generator B roller set: no bound at all.)
+    const auto [lo_it, hi_it] = std::minmax_element(full.v_ref_mps.begin(), full.v_ref_mps.end());
+    const double lo = *lo_it, hi = *hi_it;
+    const double half_step_ratio = 0.5 * q / std::max(lo, 1e-6);  // a run's slip bias bound
+    if (hi - lo < (c.bench == can::BenchKind::Roller ? 1.5 : 0.5) * q) {
       ref_noise.step = q;
       ref_noise.sd = std::max(ref_noise.sd, q / std::sqrt(12.0));
-      full.ref_bias_bound = 0.5 * q / std::max(*lo, 1e-6);
+      full.ref_bias_bound = half_step_ratio;
       // A roller is held at speed: its flips between two levels are the encoder's ripple or
       // noise at a level boundary, not speed. It is read as its mean (closer to the truth than
       // either level, and free of the flips' steps).
@@ -145,7 +145,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
         std::fill(full.v_ref_mps.begin(), full.v_ref_mps.end(), mean);
       }
     } else if (c.bench == can::BenchKind::Roller && ref_noise.step > 0 &&
-               *hi - *lo < kHeldRollerSteps * q) {
+               hi - lo < kHeldRollerSteps * q) {
       // A roller held at speed whose encoder's ripple dithers a few levels: rebuilt from its
       // transitions, a ripple of about a step is clipped (52-105 % of it, by where the levels
       // fall) and what is left of it in the slip looks like a lag. The ripple is the encoder's,
@@ -153,10 +153,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       // it, fitted to the staircase.
       if (auto trend = held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
           !trend.empty()) {
-        // (The bound before the speed is replaced: lo points into the old one. Taken after it,
-        // it read freed memory and was 300 on a generator B roller set: no bound at all.)
-        full.ref_bias_bound = 0.5 * q / std::max(*lo, 1e-6);
         full.v_ref_mps = std::move(trend);
+        full.ref_bias_bound = half_step_ratio;
         ref_smooth = true;
       }
     }

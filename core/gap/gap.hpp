@@ -133,11 +133,6 @@ struct ConditionOptions {
   /// samples (0: keep everything).
   double runaway_slip_per_sample = 0.01;
   pipeline::ForceSource force = pipeline::ForceSource::Pressure;
-  /// Runs start this long before the pressure last sat under kRestPressureBar (from the event's
-  /// lead-in): the rise from rest tells a dead zone from a slip offset (< 0: no lead-in).
-  /// (50 ms of rest: a pressure channel clipped at zero reads its noise as a mean force at rest,
-  /// a dead zone of a few 0.01 bar to the fits: generator A's null BIC drops 6.7 -> 25.)
-  double lead_in_rest_s = 0.0;
 };
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o);
