@@ -101,7 +101,7 @@ TEST(OthersData, OneNoisySampleAboveTheSwitchOffDoesNotEndTheStop) {
 TEST(OthersData, AnEventKeepsTheRiseFromRestBeforeItsStart) {
   // The detector starts at 2 bar; a brake's dead zone (the pressure rises, the wheel does not
   // slip) lies below that. The samples of the lead_in_s before the start go with the event,
-  // apart from its samples.
+  // apart from its samples: back to rest on a slow ramp too.
   pipeline::Calibration c;
   pipeline::EventSettings set;
   pipeline::EventDetector d(c, set);
@@ -115,8 +115,9 @@ TEST(OthersData, AnEventKeepsTheRiseFromRestBeforeItsStart) {
     s.pressure_bar = p;
     return d.feed(s);
   };
-  for (int i = 0; i < 400; ++i) ASSERT_FALSE(feed(0.0));
-  for (int i = 0; i < 19; ++i) ASSERT_FALSE(feed(0.1 * i));  // 0 .. 1.8 bar
+  for (int i = 0; i < 1200; ++i) ASSERT_FALSE(feed(0.0));
+  // A slow ramp: 0 .. 1.9 bar in 0.38 s (5 bar/s; a 0.15 s lead-in held no sample at rest).
+  for (int i = 0; i < 381; ++i) ASSERT_FALSE(feed(0.005 * i));
   for (int i = 0; i < 200; ++i) ASSERT_FALSE(feed(2.0 + 0.1 * i));
   ASSERT_TRUE(done = feed(0.5));  // released
   EXPECT_EQ(done->end_reason, "release");
