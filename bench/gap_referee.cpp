@@ -1,7 +1,7 @@
 // The blinded-injection referee of `brakefit gap` (issues 5 and 10):
 //   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
-//               [--generators A,B] [--crossed 1] [--only EFFECT,...] [--why 1]
+//               [--generators A,B] [--crossed 1] [--only EFFECT,...] [--why 1|2]
 // Two generators make the runs: A, the project's simulator (candump logs), and B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export). For each condition (model vs measurement on the roller and on flat
@@ -71,7 +71,7 @@ struct Settings {
   double null_share = 0.3;
   std::uint64_t seed = 1;
   std::vector<std::string> only;  ///< --only: run just the trials drawing these effects
-  bool why = false;               ///< --why 1: each miss's diagnosis notes on stderr
+  int why = 0;  ///< --why 1: each miss's diagnosis notes on stderr; 2: also each hit, one line
 };
 
 /// The gates calibrated on null sets of one generator (seeds 1 000 000+, disjoint from the
@@ -155,6 +155,12 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
                                inj.magnitude, fmt::join(r.verdict, ", "));
     if (!r.exact() && st.why)
       for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
+    if (r.exact() && st.why > 1)  // --why 2: the hits too, with their estimate and gap left
+      std::cerr << fmt::format(
+          "[{}] trial {}: {} {:.4g} said {} (estimate {:.4g}, gap after / "
+          "floor {:.2f})\n",
+          cname, kept[k], inj.effect, inj.magnitude, fmt::join(r.verdict, ", "), r.estimate,
+          r.gap_after_n / std::max(r.noise_n, 1e-9));
     if (said == "refused") {
       ++refused;
       std::cerr << fmt::format("[{}] refused ({} {}): {}\n", cname, inj.effect, inj.magnitude,
@@ -275,7 +281,9 @@ int run(int argc, char** argv) {
              "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
              "  [--seed S] [--threads N] [--generators A,B] [--crossed 1|0]\n"
              "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
-             "  [--why 1]             (each miss's notes; the misses are always listed)\n";
+             "  [--why 1|2]           (each miss's notes; the misses are always listed; 2: the "
+             "hits\n"
+             "                         too, with the estimate and the gap left)\n";
       return k == "-h" || k == "--help" ? 0 : 64;
     }
     const char* v = argv[i + 1];
@@ -301,7 +309,7 @@ int run(int argc, char** argv) {
       std::stringstream list(v);
       for (std::string e; std::getline(list, e, ',');) st.only.push_back(e);
     } else if (k == "--why")
-      st.why = std::string(v) == "1";
+      st.why = std::atoi(v);
     else if (k == "--crossed")
       crossed = std::string(v) != "0" && std::string(v) != "no";
     else {
