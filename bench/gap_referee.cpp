@@ -150,17 +150,17 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     const auto& inj = r.truth;
     const std::string said = r.verdict.empty() ? "?" : r.verdict.front();
     ++confusion[inj.effect][said];
-    if (!r.exact())  // every miss, to be looked at one by one (trial index: --only keeps it)
-      std::cerr << fmt::format("[{}] trial {}: {} {:.4g} said {}\n", cname, kept[k], inj.effect,
-                               inj.magnitude, fmt::join(r.verdict, ", "));
+    const double ratio = r.gap_after_n / std::max(r.noise_n, 1e-9);  // gap after / floor
+    // Every miss, to be looked at one by one (trial index: --only keeps it); --why 2: the hits
+    // too, with their estimate and the gap left.
+    if (!r.exact() || st.why > 1)
+      std::cerr << fmt::format(
+          "[{}] trial {}: {} {:.4g} said {}{}\n", cname, kept[k], inj.effect, inj.magnitude,
+          fmt::join(r.verdict, ", "),
+          r.exact() ? fmt::format(" (estimate {:.4g}, gap after / floor {:.2f})", r.estimate, ratio)
+                    : std::string());
     if (!r.exact() && st.why)
       for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
-    if (r.exact() && st.why > 1)  // --why 2: the hits too, with their estimate and gap left
-      std::cerr << fmt::format(
-          "[{}] trial {}: {} {:.4g} said {} (estimate {:.4g}, gap after / "
-          "floor {:.2f})\n",
-          cname, kept[k], inj.effect, inj.magnitude, fmt::join(r.verdict, ", "), r.estimate,
-          r.gap_after_n / std::max(r.noise_n, 1e-9));
     if (said == "refused") {
       ++refused;
       std::cerr << fmt::format("[{}] refused ({} {}): {}\n", cname, inj.effect, inj.magnitude,
@@ -177,7 +177,6 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     if (r.exact()) ++exact_effects;
     if (std::isfinite(r.estimate))
       mag_err[inj.effect].push_back(std::abs(r.estimate - inj.magnitude) / std::abs(inj.magnitude));
-    const double ratio = r.gap_after_n / std::max(r.noise_n, 1e-9);
     if (r.correct()) after_over_noise.push_back(ratio);
     after_by_effect[inj.effect].push_back(ratio);
   }
@@ -281,9 +280,8 @@ int run(int argc, char** argv) {
              "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
              "  [--seed S] [--threads N] [--generators A,B] [--crossed 1|0]\n"
              "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
-             "  [--why 1|2]           (each miss's notes; the misses are always listed; 2: the "
-             "hits\n"
-             "                         too, with the estimate and the gap left)\n";
+             "  [--why 1|2]           (1: each miss's notes, the misses are always listed;\n"
+             "                         2: each hit too, with its estimate and gap left)\n";
       return k == "-h" || k == "--help" ? 0 : 64;
     }
     const char* v = argv[i + 1];
