@@ -96,6 +96,9 @@ sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Genera
     }
     sim::set_gates(gates);
   }
+  const auto largest = std::max_element(gates.null_best_gain.begin(), gates.null_best_gain.end());
+  std::cerr << fmt::format("[{}] the largest null gain is the null set of seed {}\n", cname,
+                           1'000'000 + (largest - gates.null_best_gain.begin()));
   std::cerr << fmt::format(
       "[{}] null best-candidate gain: median {:.3f}, max {:.3f}; best dBIC min {:.1f}; gates: "
       "gain >= {:.3f}, dBIC <= -{:.1f} (shipped: {:.3f}, -{:.1f}); null gap / floor: median "
@@ -168,6 +171,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     }
     if (inj.effect == "none") {
       ++n_none;
+      after_by_effect["none"].push_back(ratio);  // the null's own gap / floor: the floor's honesty
       if (said != "none" && said != "unexplained" && said != "refused") ++fp_none;
       if (r.exact()) ++none_exact;
       continue;

@@ -41,33 +41,51 @@ struct RippleFit {
   double ssr = 0;                  ///< residual sum of squares of the regression
 };
 
-/// An encoder's ripple columns: K (1 - s) cos and sin of its angle (times frequency_scale), the
-/// reference's with the opposite sign. The ripple is in the slip, the residual in the force: a
-/// filtered force channel shows the model's image of it through the same filter (at 15 Hz, a
-/// fifth wheel at 70 km/h, a 19 ms filter passes half of it, 60 degrees late): the columns go
-/// through it too.
-std::pair<std::vector<double>, std::vector<double>> ripple_columns(const Run& r,
-                                                                   const std::vector<double>& gain,
+/// The fitted model a ripple is seen through (the baseline, or the model with the named effects).
+struct Model {
+  const std::vector<double>& params;
+  const std::vector<Effect>& effects;
+};
+
+/// An encoder's ripple columns: the model's force answer to a slip ripple (1 - s) cos and sin
+/// of the encoder's angle (times frequency_scale), the reference's with the opposite sign. The
+/// ripple is in the measured slip, the residual in the force: the model passes the ripple as it
+/// passes the slip, by central differences of predict. On the baseline that is K (1 - s) cos,
+/// through a filtered force channel's filter (at 15 Hz, a fifth wheel at 70 km/h, a 19 ms filter
+/// passes half of it, 60 degrees late); a relaxing tyre passes it late and smaller too (sigma / V
+/// 0.23 s against a wheel's 1.2 s revolution at 5 km/h: 0.65 of it, 49 degrees late; read as the
+/// baseline's K (1 - s), a generator B relaxation set's refit with the ripple estimated again
+/// left 36 N against a 6.6 N floor, 9.8 N before it). The filter is applied to the unfiltered
+/// answer from a steady start: the ripple was there before the run's first point (predict pins
+/// the filter's state there to the measured force, which would hide the ripple's first tau).
+std::pair<std::vector<double>, std::vector<double>> ripple_columns(const Run& r, const Model& m,
                                                                    std::size_t e,
                                                                    double frequency_scale) {
   const std::size_t n = r.t_s.size();
   const double sign = e == 0 ? 1.0 : -1.0;
-  std::vector<double> cos_col(n), sin_col(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double ang = frequency_scale * (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
-    cos_col[i] = sign * gain[i] * std::cos(ang);
-    sin_col[i] = sign * gain[i] * std::sin(ang);
-  }
-  if (r.pressure_filter_s > 0) {
-    filter_first_order(r.t_s, cos_col, r.pressure_filter_s, cos_col.front());
-    filter_first_order(r.t_s, sin_col, r.pressure_filter_s, sin_col.front());
-  }
-  return {std::move(cos_col), std::move(sin_col)};
+  constexpr double kH = 1e-5;  // slip
+  auto answer = [&](auto wave) {
+    Run up = r, down = r;
+    up.pressure_filter_s = down.pressure_filter_s = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double ang = frequency_scale * (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
+      const double d = kH * sign * (1 - r.slip[i]) * wave(ang);
+      up.slip[i] += d;
+      down.slip[i] -= d;
+    }
+    const auto fu = predict(up, m.params, m.effects), fd = predict(down, m.params, m.effects);
+    std::vector<double> col(n);
+    for (std::size_t i = 0; i < n; ++i) col[i] = (fu[i] - fd[i]) / (2 * kH);
+    if (r.pressure_filter_s > 0) filter_first_order(r.t_s, col, r.pressure_filter_s, col.front());
+    return col;
+  };
+  return {answer([](double a) { return std::cos(a); }),
+          answer([](double a) { return std::sin(a); })};
 }
 
 /// Regresses the residual y on a polynomial trend in time (order trend, kept out of the ripple)
-/// and K (1 - s) cos/sin of the encoders' angles (the reference's with the opposite sign).
-RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vector<double>& gain,
+/// and the model's answer to a slip ripple at the encoders' angles (ripple_columns).
+RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const Model& m,
                      std::array<bool, 2> use, int trend,
                      std::array<double, 2> frequency_scale = {1.0, 1.0}) {
   RippleFit out;
@@ -87,7 +105,7 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vect
   Eigen::Index c = trend + 1;
   for (std::size_t e = 0; e < 2; ++e) {
     if (!use[e]) continue;
-    const auto [cos_col, sin_col] = ripple_columns(r, gain, e, frequency_scale[e]);
+    const auto [cos_col, sin_col] = ripple_columns(r, m, e, frequency_scale[e]);
     for (std::size_t i = 0; i < n; ++i) {
       a(static_cast<Eigen::Index>(i), c) = cos_col[i];
       a(static_cast<Eigen::Index>(i), c + 1) = sin_col[i];
@@ -116,13 +134,12 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const std::vect
 /// encoder's longer runs, only the phase is scanned (a linear trend refitted at each), and kept
 /// when it explains some of the residual. Returns the cos and sin coefficients, or nothing.
 std::optional<std::array<double, 2>> scan_phase(const Run& r, const std::vector<double>& y,
-                                                const std::vector<double>& gain, std::size_t e,
-                                                double amplitude) {
+                                                const Model& m, std::size_t e, double amplitude) {
   const std::size_t n = r.t_s.size();
   // The free fit's columns, residualised on the trend: SSR(c, s) is then a quadratic form.
   Eigen::MatrixXd trend(static_cast<Eigen::Index>(n), 2), cols(static_cast<Eigen::Index>(n), 3);
   const double t_end = std::max(r.t_s.back(), 1e-6);
-  const auto [cos_col, sin_col] = ripple_columns(r, gain, e, 1.0);
+  const auto [cos_col, sin_col] = ripple_columns(r, m, e, 1.0);
   for (std::size_t i = 0; i < n; ++i) {
     const auto row = static_cast<Eigen::Index>(i);
     trend(row, 0) = 1;
@@ -204,9 +221,9 @@ void take_out_reference_ripple(Run& r, double c, double s) {
 
 std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<double>& params,
                                   const std::vector<Effect>& baseline) {
-  const MfParams m{params[0], params[1], params[2], params[3], 0, 0};
+  const Model model{params, baseline};
   struct Prepared {
-    std::vector<double> residual, gain;
+    std::vector<double> residual;
     std::array<double, 2> revolutions{};
   };
   std::vector<Prepared> prep(runs.size());
@@ -244,13 +261,9 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     if (n < 30 || r.wheel_angle_rad.size() != n || r.ref_angle_rad.size() != n) continue;
     const auto f = predict(r, params, baseline);
     Prepared& p = prep[k];
-    for (std::size_t i = 0; i < n; ++i) {
-      // Residual = K (1 - s) (eps_wheel - eps_ref) for speed ripples eps (first order in eps).
-      const double h = 1e-5;
-      const double slope = (mf_force_n(m, r.slip[i] + h) - mf_force_n(m, r.slip[i] - h)) / (2 * h);
-      p.gain.push_back(slope * (1 - r.slip[i]));
-      p.residual.push_back(r.force_n[i] - f[i]);
-    }
+    // Residual = the model's answer to (1 - s) (eps_wheel - eps_ref) for speed ripples eps
+    // (first order in eps; ripple_columns).
+    for (std::size_t i = 0; i < n; ++i) p.residual.push_back(r.force_n[i] - f[i]);
     p.revolutions = {r.wheel_angle_rad.back() / (2 * M_PI), r.ref_angle_rad.back() / (2 * M_PI)};
   }
   // Pass 1: amplitude and phase on the runs spanning kMinRevolutions; an encoder's amplitude is
@@ -259,12 +272,12 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   int corrected = 0, uncorrected = 0;
   std::array<std::vector<double>, 2> amps;
   for (std::size_t k = 0; k < runs.size(); ++k) {
-    if (prep[k].gain.empty()) continue;
+    if (prep[k].residual.empty()) continue;
     const std::array<bool, 2> use{
         prep[k].revolutions[0] >= kMinRevolutions,
         prep[k].revolutions[1] >= kMinRevolutions && !runs[k].ref_ripple_from_speed};
     if (!use[0] && !use[1]) continue;
-    fits[k] = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2);
+    fits[k] = fit_ripple(runs[k], prep[k].residual, model, use, 2);
     // A ripple is narrow-band: at its encoder's revolution rate it must stand well above the
     // same fit at neighbouring rates (a residual left by an unmodelled effect is smooth and
     // broad-band, and must not be taken for one). Each encoder is checked with the other held at
@@ -277,14 +290,13 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       if (!fits[k].used[e]) continue;
       std::array<bool, 2> other = use;
       other[e] = false;
-      const double without = fit_ripple(runs[k], prep[k].residual, prep[k].gain, other, 2).ssr;
+      const double without = fit_ripple(runs[k], prep[k].residual, model, other, 2).ssr;
       double neighbours = 0;
       for (const double scale : {0.5, 2.0}) {
         std::array<double, 2> scales{1.0, 1.0};
         scales[e] = scale;
         neighbours = std::max(
-            neighbours,
-            without - fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 2, scales).ssr);
+            neighbours, without - fit_ripple(runs[k], prep[k].residual, model, use, 2, scales).ssr);
       }
       const bool narrow = without - fits[k].ssr > kNarrowBand * neighbours;
       const double amp = std::hypot(fits[k].c[e], fits[k].s[e]);
@@ -307,12 +319,12 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   // phase alone at that amplitude. Where neither places it, the ripple stays in the run and its
   // slip noise carries it (amplitude / sqrt 2 of (1 - s)): the floor is honest about it.
   for (std::size_t k = 0; k < runs.size(); ++k) {
-    if (prep[k].gain.empty()) continue;
+    if (prep[k].residual.empty()) continue;
     std::array<bool, 2> use{};
     for (std::size_t e = 0; e < 2; ++e) use[e] = !fits[k].used[e] && amplitude[e] > 0;
     use[1] = use[1] && !runs[k].ref_ripple_from_speed;  // read from its own speed
     if (!use[0] && !use[1]) continue;
-    const RippleFit short_fit = fit_ripple(runs[k], prep[k].residual, prep[k].gain, use, 1);
+    const RippleFit short_fit = fit_ripple(runs[k], prep[k].residual, model, use, 1);
     for (std::size_t e = 0; e < 2; ++e) {
       if (!use[e]) continue;
       const double amp = std::hypot(short_fit.c[e], short_fit.s[e]);
@@ -325,7 +337,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       }
       if (prep[k].revolutions[e] >= kMinScanRevolutions &&
           prep[k].revolutions[e] < kMinPhaseRevolutions)
-        if (const auto cs = scan_phase(runs[k], prep[k].residual, prep[k].gain, e, amplitude[e])) {
+        if (const auto cs = scan_phase(runs[k], prep[k].residual, model, e, amplitude[e])) {
           fits[k].used[e] = true;
           fits[k].c[e] = (*cs)[0];
           fits[k].s[e] = (*cs)[1];
