@@ -210,7 +210,9 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   std::vector<double> raw_slip(v_wheel.size());
   for (std::size_t i = 0; i < raw_slip.size(); ++i)
     raw_slip[i] = 1.0 - v_wheel[i] / full.v_ref_mps[i];
-  const double slip_sd = smoothed_noise_sd(raw_slip, o.smooth_half_window);
+  const std::optional<double> measured_sd = smoothed_noise_sd(raw_slip, o.smooth_half_window);
+  full.slip_sd_unmeasured = !measured_sd;
+  const double slip_sd = measured_sd.value_or(0.0);
   const auto vr = smooth(full.v_ref_mps, o.smooth_half_window),
              vw = smooth(v_wheel, o.smooth_half_window);
   full.v_ref_mps = vr;
@@ -267,6 +269,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.runaway_force_n = full.runaway_force_n;
   r.ref_ripple_from_speed = full.ref_ripple_from_speed;
   r.ref_ripple_amplitude = full.ref_ripple_amplitude;
+  r.slip_sd_unmeasured = full.slip_sd_unmeasured;
   for (std::size_t i : idx) {
     r.t_s.push_back(full.t_s[i]);
     r.slip.push_back(full.slip[i]);
@@ -280,6 +283,39 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     r.pressure_rate_bar_per_s.push_back(full.pressure_rate_bar_per_s[i]);
   }
   return r;
+}
+
+std::string borrow_slip_noise(std::vector<Run>& runs) {
+  // The slip's noise is measured on the run's own slip (4 wide windows: 130 samples at 1 kHz).
+  // Shorter runs (a 60 bar/s roller stop of generator B's relaxing tyre lasts 50 ms, a ground
+  // run at 500 Hz 0.2 s) were counted noise-free: their floor was the force's alone. The speed
+  // noise (slip noise times speed) is the instruments', the same in every run of a set.
+  double speed_noise = 0;
+  int measured = 0;
+  auto mean_speed = [](const Run& r) {
+    double v = 0;
+    for (double x : r.v_ref_mps) v += x / static_cast<double>(r.v_ref_mps.size());
+    return v;
+  };
+  for (const Run& r : runs)
+    if (!r.slip_sd_unmeasured && !r.slip_sd.empty() && !r.v_ref_mps.empty()) {
+      speed_noise += r.slip_sd.front() * mean_speed(r);
+      ++measured;
+    }
+  if (measured == 0) return {};
+  speed_noise /= measured;
+  int borrowed = 0;
+  for (Run& r : runs)
+    if (r.slip_sd_unmeasured && !r.v_ref_mps.empty()) {
+      r.slip_sd.assign(r.slip.size(), speed_noise / std::max(mean_speed(r), 0.1));
+      r.slip_sd_unmeasured = false;
+      ++borrowed;
+    }
+  if (borrowed == 0) return {};
+  return fmt::format(
+      "{} run(s) too short to measure their slip noise on (under 4 smoothing windows) took the "
+      "other runs' speed noise, {:.2g} m/s, at their own speed",
+      borrowed, speed_noise);
 }
 
 }  // namespace brakefit::gap

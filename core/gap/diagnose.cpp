@@ -69,6 +69,7 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   if (runs.size() < 2)
     throw InputError("gap diagnosis: fewer than two runs with 20 samples below the force cap");
   Report rep;
+  if (std::string note = borrow_slip_noise(runs); !note.empty()) rep.notes.push_back(note);
   // A constant quantised reference leaves a slip bias common to the runs within half a step: a
   // nuisance term of every fit (the baseline too), not an effect.
   for (const Run& r : runs)
@@ -211,6 +212,7 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
     dropped += r.t_s.size() - cut.t_s.size();
     if (cut.t_s.size() >= 20) road.push_back(std::move(cut));
   }
+  if (std::string note = borrow_slip_noise(road); !note.empty()) rep.notes.push_back(note);
   if (road.size() < 2)
     throw InputError(
         "bench-vs-bench gap needs at least two road runs (each transfer effect is checked on a "

@@ -92,6 +92,8 @@ struct Run {
   /// Per point: the standard deviation of the smoothed slip that the speed channels' noise
   /// leaves (errors in variables: through the local slope it is force noise the fit cannot remove).
   std::vector<double> slip_sd;
+  /// The run was too short for slip_sd to be measured on it (borrow_slip_noise fills it).
+  bool slip_sd_unmeasured = false;
   /// The slip and its noise as conditioned, before the encoders' ripple was taken out: each
   /// estimate of the ripple starts from them again (remove_encoder_ripple).
   std::vector<double> slip_as_conditioned, slip_sd_as_conditioned;

@@ -84,7 +84,11 @@ void take_out_reference_ripple(Run& r, double c, double s);
 
 /// The noise a channel keeps after the smoother (half window), measured on the channel: right
 /// for white, anti-correlated and correlated errors alike.
-double smoothed_noise_sd(const std::vector<double>& x, int half_window);
+/// Empty when the series is too short to tell noise from signal (4 wide windows).
+std::optional<double> smoothed_noise_sd(const std::vector<double>& x, int half_window);
+/// A run too short for its slip noise to be measured takes the other runs' speed noise (the same
+/// instruments), at its own speed. Returns a note (empty: none borrowed).
+std::string borrow_slip_noise(std::vector<Run>& runs);
 /// White-noise gain of the smoother (the centre Savitzky-Golay weights: sqrt(sum w^2)).
 double smoothing_noise_gain(int half_window);
 

@@ -20,7 +20,7 @@ std::vector<double> sg_weights(int half_window) {
 
 }  // namespace
 
-double smoothed_noise_sd(const std::vector<double>& x, int half_window) {
+std::optional<double> smoothed_noise_sd(const std::vector<double>& x, int half_window) {
   // The difference of the smoother and one three times as wide: both keep a quadratic, so the
   // signal cancels but for its third and higher derivatives, and the noise's share of it is
   // known for white noise (wa.wa - 2 wa.wb + wb.wb). Scaled to the smoother's own share
@@ -28,7 +28,8 @@ double smoothed_noise_sd(const std::vector<double>& x, int half_window) {
   // the anti-correlated error of edge-timed frame means (consecutive frames share an edge) and
   // the correlated error of a rebuilt staircase each count as what they leave.
   const int wide = 3 * half_window;
-  if (half_window <= 0 || x.size() < 4 * static_cast<std::size_t>(wide) + 10) return 0.0;
+  if (half_window <= 0) return 0.0;
+  if (x.size() < 4 * static_cast<std::size_t>(wide) + 10) return std::nullopt;
   const auto a = smooth(x, half_window), b = smooth(x, wide);
   std::vector<double> d;
   for (std::size_t i = static_cast<std::size_t>(wide);

@@ -266,6 +266,41 @@ TEST(OthersData, TheFloorCarriesTheSlipNoiseThroughTheSlope) {
   EXPECT_NEAR(coarse.total_n(), std::hypot(coarse.force_n, coarse.slip_n), 1e-9);
 }
 
+TEST(OthersData, ARunTooShortToMeasureItsSlipNoiseTakesTheOthersSpeedNoise) {
+  // The slip's noise is measured on the run's own slip over 4 smoothing windows: a run shorter
+  // than that was counted noise-free (its floor the force's alone). It takes the speed noise
+  // (slip noise x speed) of the runs that were measured, at its own speed.
+  auto run = [](double v_mps, std::size_t n, double sd) {
+    gap::Run r;
+    r.v_ref_mps.assign(n, v_mps);
+    r.slip.assign(n, 0.01);
+    r.slip_sd.assign(n, sd);
+    return r;
+  };
+  std::vector<gap::Run> runs{run(1.4, 400, 2e-4), run(1.4, 400, 4e-4), run(0.7, 40, 0.0)};
+  runs[2].slip_sd_unmeasured = true;
+  const std::string note = gap::borrow_slip_noise(runs);
+  EXPECT_NE(note.find("1 run(s) too short"), std::string::npos) << note;
+  ASSERT_EQ(runs[2].slip_sd.size(), 40u);
+  EXPECT_NEAR(runs[2].slip_sd.front(), 3e-4 * 1.4 / 0.7, 1e-9);  // the mean, at half the speed
+  EXPECT_FALSE(runs[2].slip_sd_unmeasured);
+  EXPECT_DOUBLE_EQ(runs[0].slip_sd.front(), 2e-4);  // measured runs keep their own
+  // Measured as zero (a noise-free export) is not unmeasured: nothing is borrowed.
+  std::vector<gap::Run> exact{run(1.4, 400, 0.0), run(1.4, 400, 0.0)};
+  EXPECT_TRUE(gap::borrow_slip_noise(exact).empty());
+  // The conditioning says which runs it could not measure: the first 100 ms of a stop.
+  const auto csv = pipeline::parse_event_csv(roller_export(0.003), "e.csv");
+  const auto ev = detect(csv, true);
+  const gap::Run whole = gap::condition("a", ev.at(0), csv.calibration, {});
+  EXPECT_FALSE(whole.slip_sd_unmeasured);
+  EXPECT_GT(whole.slip_sd.front(), 0.0);
+  pipeline::Event first = ev.at(0);
+  first.lead_in.clear();
+  first.samples.resize(100);
+  const gap::Run short_run = gap::condition("b", first, csv.calibration, {});
+  EXPECT_TRUE(short_run.slip_sd_unmeasured);
+}
+
 TEST(OthersData, TheModelForceIsFilteredAsTheDeclaredChannelWas) {
   // A ramp from rest at k per second through a first-order filter: y = k (t - tau (1 - e^-t/tau)).
   // Uneven points (a decimated run), the filter exact for an input linear between them.
