@@ -159,6 +159,18 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       }
     }
   }
+  // A roller's wheel held on one level before it slows (rolling free while the pressure rises
+  // through a dead zone): where its level is, and when it first left it (hold_rest_at_foot).
+  if (c.bench == can::BenchKind::Roller && wheel_noise.step > 0)
+    for (std::size_t i = 1; i < v_wheel.size(); ++i)
+      if (v_wheel[i] != v_wheel[i - 1]) {
+        if (v_wheel[i] < v_wheel[i - 1]) {  // slowing (a first flip upwards is ripple or noise)
+          full.held_level_mps = v_wheel.front();
+          full.held_step_mps = wheel_noise.step;
+          full.held_until_s = 0.5 * (full.t_s[i] + full.t_s[i - 1]);
+        }
+        break;
+      }
   for (auto [v, cn] : {std::pair{&full.v_ref_mps, &ref_noise}, std::pair{&v_wheel, &wheel_noise}})
     if (cn->step > 0 && !(v == &full.v_ref_mps && ref_smooth))
       *v = dequantise(full.t_s, *v, cn->step);
@@ -270,6 +282,9 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.ref_ripple_from_speed = full.ref_ripple_from_speed;
   r.ref_ripple_amplitude = full.ref_ripple_amplitude;
   r.slip_sd_unmeasured = full.slip_sd_unmeasured;
+  r.held_level_mps = full.held_level_mps;
+  r.held_step_mps = full.held_step_mps;
+  r.held_until_s = full.held_until_s;
   for (std::size_t i : idx) {
     r.t_s.push_back(full.t_s[i]);
     r.slip.push_back(full.slip[i]);

@@ -117,6 +117,14 @@ struct Run {
   /// per second of a lag (levelled at the lag, the slip compared with the force is taken
   /// earlier): the lag models (time offset, relaxation at one speed) level at their own lag.
   double ref_bias_wanted = 0.0, ref_bias_per_lag = 0.0;
+  /// A wheel speed quantised and held on one level at the run's start (a roller's wheel rolling
+  /// free): the level (m/s) and its step, and when it first left it (s; -inf: not held). The
+  /// rebuilt channel follows the first crossings' line back to the level's edge (the wheel read
+  /// as slowing 0.1-0.2 s early); the levelling puts the rest where the runs' levels overlap
+  /// (the tyre's free-rolling slip is one for all runs: hold_rest_at_foot).
+  double held_level_mps = 0.0, held_step_mps = 0.0;
+  double held_until_s = -INFINITY;
+  bool held_placed = false;  ///< hold_rest_at_foot has placed the rest (once)
   /// Slip rate at the start of the run (least squares over its first 40 ms, full rate): before
   /// the event the slip is taken as the ramp from zero at this rate (time offset).
   double initial_slip_rate_per_s = 0.0;

@@ -17,7 +17,8 @@ namespace {
 /// lag_s earlier than the force (and the declared filter's tau: a filtered force channel shows
 /// the linear region's force of tau earlier, else each ramp rate would level to its own lag).
 /// Empty when a run has too little of the linear region.
-std::vector<double> intercept_offsets(const std::vector<Run>& runs, double lag_s) {
+std::vector<double> intercept_offsets(const std::vector<Run>& runs, double lag_s,
+                                      double* mean_out = nullptr) {
   double peak = 0;
   for (const Run& r : runs)
     for (double f : r.force_n) peak = std::max(peak, f);
@@ -57,7 +58,52 @@ std::vector<double> intercept_offsets(const std::vector<Run>& runs, double lag_s
   for (std::size_t k = 0; k < runs.size(); ++k) mean += icpt[k] = ms[k] - slope * mf[k];
   mean /= static_cast<double>(runs.size());
   for (double& x : icpt) x -= mean;
+  if (mean_out) *mean_out = mean;
   return icpt;
+}
+
+/// A wheel held on one quantised level at the run's start (Run::held_until_s) rolls free at the
+/// tyre's zero-force slip, the same in every run: each run's level (in the levelled slip) bounds
+/// it, and the runs' levels overlap where it is (their grids fall differently: three runs narrow
+/// a step to about a quarter). The rebuilt channel read each rest at its level's edge, the first
+/// crossings' line followed back (the wheel read as slowing 0.1-0.2 s early, a dead zone 15 %
+/// short on generator B's roller); the level's middle is off by up to half a step in each run
+/// (tried: B's nulls took the kink it left for a lag). The rest is put in the overlap, at its
+/// point nearest the runs' zero-force intercept (intercept_ratio: a line through 5-30 % of the
+/// peak, which the curve's bend puts a little below the foot, and a dead zone further; the
+/// overlap's middle made B's null sets take the kinks for thresholds, largest null gain 0.078 ->
+/// 0.110); the slip there becomes the larger of the rebuilt one and that rest (the wheel slows
+/// from its rest, not before). Once, on the first levelling: the encoders' ripple estimates start
+/// from the slip so placed.
+void hold_rest_at_foot(std::vector<Run>& runs, double intercept_ratio) {
+  auto bounds = [](const Run& r, std::size_t i) {
+    return std::pair{
+        1 - (r.held_level_mps + 0.5 * r.held_step_mps) / r.v_ref_mps[i] - r.ref_bias_removed,
+        1 - (r.held_level_mps - 0.5 * r.held_step_mps) / r.v_ref_mps[i] - r.ref_bias_removed};
+  };
+  auto held = [](const Run& r) {
+    return !r.held_placed && std::isfinite(r.held_until_s) && r.held_step_mps > 0 &&
+           !r.slip.empty() && r.t_s.front() < r.held_until_s;
+  };
+  double lo = -INFINITY, hi = INFINITY;
+  int count = 0;
+  for (const Run& r : runs)
+    if (held(r)) {
+      const auto [l, h] = bounds(r, 0);
+      lo = std::max(lo, l);
+      hi = std::min(hi, h);
+      ++count;
+    }
+  if (count < 2 || lo > hi) return;
+  const double foot_ratio = std::clamp(intercept_ratio, lo, hi);
+  for (Run& r : runs) {
+    if (!held(r)) continue;
+    r.held_placed = true;
+    for (std::size_t i = 0; i < r.slip.size() && r.t_s[i] < r.held_until_s; ++i) {
+      const auto [l, h] = bounds(r, i);
+      r.slip[i] = std::max(r.slip[i], std::clamp(foot_ratio, l, h));
+    }
+  }
 }
 
 /// The lag at which the levelling's sensitivity to a time offset is measured.
@@ -71,7 +117,8 @@ std::string level_reference_biases(std::vector<Run>& runs) {
   std::size_t biased = 0;
   for (const Run& r : runs) biased += r.ref_bias_bound > 0;
   if (biased == 0 || runs.size() < 2) return {};
-  const std::vector<double> offset = intercept_offsets(runs, 0.0);
+  double mean_icpt = 0;
+  const std::vector<double> offset = intercept_offsets(runs, 0.0, &mean_icpt);
   if (offset.empty()) return {};
   // A time offset moves each run's intercept by its slip rate times the lag: levelled at zero
   // lag, the biases would take the lag's signature in the linear region (a 12 ms lag on
@@ -90,6 +137,7 @@ std::string level_reference_biases(std::vector<Run>& runs) {
     r.ref_bias_per_lag = lagged.empty() ? 0.0 : (lagged[k] - offset[k]) / kLevellingLagProbeS;
     largest = std::max(largest, std::abs(total));
   }
+  hold_rest_at_foot(runs, mean_icpt);
   return fmt::format(
       "the reference speed was constant and quantised (a roller read at {:.2g} m/s resolution): "
       "each run's slip is off by up to half a step of it ({:.2g}); the runs' slips were levelled "

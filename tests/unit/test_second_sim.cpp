@@ -178,9 +178,10 @@ TEST(SecondSim, ADeadZoneIsToldFromASlipOffsetByTheRiseFromRest) {
   }
   // On the roller too (from the last sample at rest: its wheel's quantised rest level is not a
   // segment of the fit). These two 2.9 and 2.5 bar sets were named slip_offset; their dead
-  // zones are read short (1.8 and 1.4 bar: the rise of a quantised 5 km/h wheel), so only the
-  // name is asserted. The 2.1 and 2.9 bar sets were named slip_offset while the lead-in (0.15 s)
-  // held no sample at rest on their slower ramps (under 12 bar/s).
+  // zones are read short (2.6 and 1.5 bar: the rise of a quantised 5 km/h wheel; 1.8 and 1.4
+  // before its rest was placed where the runs' levels overlap), so only the name is asserted.
+  // The 2.1 and 2.9 bar sets were named slip_offset while the lead-in (0.15 s) held no sample at
+  // rest on their slower ramps (under 12 bar/s).
   for (const auto& [magnitude, seed] : std::vector<std::pair<double, std::uint64_t>>{
            {2.862, 1096}, {2.526, 1103}, {2.08, 1007}, {2.905, 1143}}) {
     const sim::Injection inj{"brake_threshold", magnitude, gap::Condition::Roller,
@@ -188,6 +189,23 @@ TEST(SecondSim, ADeadZoneIsToldFromASlipOffsetByTheRiseFromRest) {
     const auto t = sim::run_trial(inj, seed, gap::calibrated_options(gap::Condition::Roller));
     ASSERT_FALSE(t.verdict.empty());
     EXPECT_EQ(t.verdict.front(), "brake_threshold") << "seed " << seed;
+  }
+}
+
+TEST(SecondSim, AQuantisedWheelRestsWhereTheRunsLevelsOverlap) {
+  // A 5 km/h wheel held on one 1-3 mm/s level while the pressure rises through a dead zone: the
+  // rebuilt speed followed the first crossings' line back to the level's edge, the wheel read as
+  // slowing 0.1-0.2 s early and the dead zone short (2.356 and 1.822 bar for these 2.838 and
+  // 2.862 bar on B's gates). The tyre rolls free at one slip in every run: it rests where the
+  // runs' levels overlap.
+  for (const auto& [magnitude, seed] :
+       std::vector<std::pair<double, std::uint64_t>>{{2.838, 1069}, {2.862, 1096}}) {
+    const sim::Injection inj{"brake_threshold", magnitude, gap::Condition::Roller,
+                             sim::Generator::B};
+    const auto t = sim::run_trial(inj, seed, gap::calibrated_options(gap::Condition::Roller));
+    ASSERT_FALSE(t.verdict.empty());
+    EXPECT_EQ(t.verdict.front(), "brake_threshold") << "seed " << seed;
+    EXPECT_NEAR(t.estimate, magnitude, 0.1 * magnitude) << "seed " << seed;
   }
 }
 
