@@ -74,8 +74,10 @@ struct Settings {
   int why = 0;  ///< --why 1: each miss's diagnosis notes on stderr; 2: also each hit, one line
 };
 
-/// The gates calibrated on null sets of one generator (seeds 1 000 000+, disjoint from the
-/// trials').
+/// The calibration's null sets: seeds from here on, disjoint from the trials'.
+constexpr std::uint64_t kCalibrationSeed0 = 1'000'000;
+
+/// The gates calibrated on null sets of one generator (from kCalibrationSeed0).
 sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Generator gen) {
   const std::string cname = fmt::format("{} {}", gap::to_string(c), sim::to_string(gen));
   std::cerr << fmt::format("[{}] calibrating the gates on {} null sets...\n", cname, st.calib);
@@ -85,7 +87,7 @@ sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Genera
     const auto per = parallel_map<sim::GateCalibration>(
         st.calib,
         [&](int i) {
-          return sim::calibrate_gates(c, 1, 1'000'000 + static_cast<std::uint64_t>(i),
+          return sim::calibrate_gates(c, 1, kCalibrationSeed0 + static_cast<std::uint64_t>(i),
                                       gap::Options{}, gen);
         },
         cname + " null sets");
@@ -97,8 +99,9 @@ sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Genera
     sim::set_gates(gates);
   }
   const auto largest = std::max_element(gates.null_best_gain.begin(), gates.null_best_gain.end());
-  std::cerr << fmt::format("[{}] the largest null gain is the null set of seed {}\n", cname,
-                           1'000'000 + (largest - gates.null_best_gain.begin()));
+  std::cerr << fmt::format(
+      "[{}] the largest null gain is the null set of seed {}\n", cname,
+      kCalibrationSeed0 + static_cast<std::uint64_t>(largest - gates.null_best_gain.begin()));
   std::cerr << fmt::format(
       "[{}] null best-candidate gain: median {:.3f}, max {:.3f}; best dBIC min {:.1f}; gates: "
       "gain >= {:.3f}, dBIC <= -{:.1f} (shipped: {:.3f}, -{:.1f}); null gap / floor: median "

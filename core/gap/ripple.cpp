@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <utility>
 
@@ -47,6 +48,8 @@ struct Model {
   const std::vector<Effect>& effects;
 };
 
+using ColumnPair = std::pair<std::vector<double>, std::vector<double>>;
+
 /// An encoder's ripple columns: the model's force answer to a slip ripple (1 - s) cos and sin
 /// of the encoder's angle (times frequency_scale), the reference's with the opposite sign. The
 /// ripple is in the measured slip, the residual in the force: the model passes the ripple as it
@@ -58,9 +61,7 @@ struct Model {
 /// left 36 N against a 6.6 N floor, 9.8 N before it). The filter is applied to the unfiltered
 /// answer from a steady start: the ripple was there before the run's first point (predict pins
 /// the filter's state there to the measured force, which would hide the ripple's first tau).
-std::pair<std::vector<double>, std::vector<double>> ripple_columns(const Run& r, const Model& m,
-                                                                   std::size_t e,
-                                                                   double frequency_scale) {
+ColumnPair ripple_columns(const Run& r, const Model& m, std::size_t e, double frequency_scale) {
   const std::size_t n = r.t_s.size();
   const double sign = e == 0 ? 1.0 : -1.0;
   constexpr double kH = 1e-5;  // slip
@@ -83,11 +84,32 @@ std::pair<std::vector<double>, std::vector<double>> ripple_columns(const Run& r,
           answer([](double a) { return std::sin(a); })};
 }
 
+/// One run's ripple columns through the model, each encoder and rate computed once: the
+/// significance, narrow-band and short-run fits ask for the same columns again (two predicts a
+/// column; the run's slip is not changed until the estimate is taken out).
+class RunColumns {
+ public:
+  RunColumns(const Run& r, const Model& m) : r_(r), m_(m) {}
+  const Run& run() const { return r_; }
+  const ColumnPair& at(std::size_t e, double frequency_scale) {
+    const auto key = std::pair{e, frequency_scale};
+    auto it = cache_.find(key);
+    if (it == cache_.end())
+      it = cache_.emplace(key, ripple_columns(r_, m_, e, frequency_scale)).first;
+    return it->second;
+  }
+
+ private:
+  const Run& r_;
+  const Model& m_;
+  std::map<std::pair<std::size_t, double>, ColumnPair> cache_;
+};
+
 /// Regresses the residual y on a polynomial trend in time (order trend, kept out of the ripple)
 /// and the model's answer to a slip ripple at the encoders' angles (ripple_columns).
-RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const Model& m,
-                     std::array<bool, 2> use, int trend,
-                     std::array<double, 2> frequency_scale = {1.0, 1.0}) {
+RippleFit fit_ripple(RunColumns& columns, const std::vector<double>& y, std::array<bool, 2> use,
+                     int trend, std::array<double, 2> frequency_scale = {1.0, 1.0}) {
+  const Run& r = columns.run();
   RippleFit out;
   const std::size_t n = r.t_s.size();
   const int enc = static_cast<int>(use[0]) + static_cast<int>(use[1]);
@@ -105,7 +127,7 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const Model& m,
   Eigen::Index c = trend + 1;
   for (std::size_t e = 0; e < 2; ++e) {
     if (!use[e]) continue;
-    const auto [cos_col, sin_col] = ripple_columns(r, m, e, frequency_scale[e]);
+    const auto& [cos_col, sin_col] = columns.at(e, frequency_scale[e]);
     for (std::size_t i = 0; i < n; ++i) {
       a(static_cast<Eigen::Index>(i), c) = cos_col[i];
       a(static_cast<Eigen::Index>(i), c + 1) = sin_col[i];
@@ -133,13 +155,14 @@ RippleFit fit_ripple(const Run& r, const std::vector<double>& y, const Model& m,
 /// A run too short to tell a ripple's amplitude from its trend: with the amplitude known from the
 /// encoder's longer runs, only the phase is scanned (a linear trend refitted at each), and kept
 /// when it explains some of the residual. Returns the cos and sin coefficients, or nothing.
-std::optional<std::array<double, 2>> scan_phase(const Run& r, const std::vector<double>& y,
-                                                const Model& m, std::size_t e, double amplitude) {
+std::optional<std::array<double, 2>> scan_phase(RunColumns& columns, const std::vector<double>& y,
+                                                std::size_t e, double amplitude) {
+  const Run& r = columns.run();
   const std::size_t n = r.t_s.size();
   // The free fit's columns, residualised on the trend: SSR(c, s) is then a quadratic form.
   Eigen::MatrixXd trend(static_cast<Eigen::Index>(n), 2), cols(static_cast<Eigen::Index>(n), 3);
   const double t_end = std::max(r.t_s.back(), 1e-6);
-  const auto [cos_col, sin_col] = ripple_columns(r, m, e, 1.0);
+  const auto& [cos_col, sin_col] = columns.at(e, 1.0);
   for (std::size_t i = 0; i < n; ++i) {
     const auto row = static_cast<Eigen::Index>(i);
     trend(row, 0) = 1;
@@ -227,6 +250,9 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     std::array<double, 2> revolutions{};
   };
   std::vector<Prepared> prep(runs.size());
+  std::vector<RunColumns> columns;
+  columns.reserve(runs.size());
+  for (const Run& r : runs) columns.emplace_back(r, model);
   // Each estimate starts from the slip as conditioned, against the latest baseline (refitted on
   // the slip the previous estimate corrected): the estimates are not stacked, so a short run's
   // phase, placed once against a bent baseline, is placed again against a straighter one.
@@ -277,7 +303,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
         prep[k].revolutions[0] >= kMinRevolutions,
         prep[k].revolutions[1] >= kMinRevolutions && !runs[k].ref_ripple_from_speed};
     if (!use[0] && !use[1]) continue;
-    fits[k] = fit_ripple(runs[k], prep[k].residual, model, use, 2);
+    fits[k] = fit_ripple(columns[k], prep[k].residual, use, 2);
     // A ripple is narrow-band: at its encoder's revolution rate it must stand well above the
     // same fit at neighbouring rates (a residual left by an unmodelled effect is smooth and
     // broad-band, and must not be taken for one). Each encoder is checked with the other held at
@@ -290,13 +316,13 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       if (!fits[k].used[e]) continue;
       std::array<bool, 2> other = use;
       other[e] = false;
-      const double without = fit_ripple(runs[k], prep[k].residual, model, other, 2).ssr;
+      const double without = fit_ripple(columns[k], prep[k].residual, other, 2).ssr;
       double neighbours = 0;
       for (const double scale : {0.5, 2.0}) {
         std::array<double, 2> scales{1.0, 1.0};
         scales[e] = scale;
         neighbours = std::max(
-            neighbours, without - fit_ripple(runs[k], prep[k].residual, model, use, 2, scales).ssr);
+            neighbours, without - fit_ripple(columns[k], prep[k].residual, use, 2, scales).ssr);
       }
       const bool narrow = without - fits[k].ssr > kNarrowBand * neighbours;
       const double amp = std::hypot(fits[k].c[e], fits[k].s[e]);
@@ -324,7 +350,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     for (std::size_t e = 0; e < 2; ++e) use[e] = !fits[k].used[e] && amplitude[e] > 0;
     use[1] = use[1] && !runs[k].ref_ripple_from_speed;  // read from its own speed
     if (!use[0] && !use[1]) continue;
-    const RippleFit short_fit = fit_ripple(runs[k], prep[k].residual, model, use, 1);
+    const RippleFit short_fit = fit_ripple(columns[k], prep[k].residual, use, 1);
     for (std::size_t e = 0; e < 2; ++e) {
       if (!use[e]) continue;
       const double amp = std::hypot(short_fit.c[e], short_fit.s[e]);
@@ -337,7 +363,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       }
       if (prep[k].revolutions[e] >= kMinScanRevolutions &&
           prep[k].revolutions[e] < kMinPhaseRevolutions)
-        if (const auto cs = scan_phase(runs[k], prep[k].residual, model, e, amplitude[e])) {
+        if (const auto cs = scan_phase(columns[k], prep[k].residual, e, amplitude[e])) {
           fits[k].used[e] = true;
           fits[k].c[e] = (*cs)[0];
           fits[k].s[e] = (*cs)[1];
