@@ -163,8 +163,10 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
       std::cerr << fmt::format(
           "[{}] trial {}: {} {:.4g} said {}{}\n", cname, kept[k], inj.effect, inj.magnitude,
           fmt::join(r.verdict, ", "),
-          r.exact() ? fmt::format(" (estimate {:.4g}, gap after / floor {:.2f})", r.estimate, ratio)
-                    : std::string());
+          r.exact() ? fmt::format(" (estimate {:.4g}, gap after / floor {:.2f}, before {:.2f})",
+                                  r.estimate, ratio, r.gap_before_n / std::max(r.noise_n, 1e-9))
+                    : fmt::format(" (gap before / floor {:.2f})",
+                                  r.gap_before_n / std::max(r.noise_n, 1e-9)));
     if (!r.exact() && st.why)
       for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
     if (said == "refused") {

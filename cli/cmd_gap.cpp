@@ -48,7 +48,8 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
   j["condition"] = gap::to_string(condition);
   j["gates"] = {{"gain", num(gates.gate_gain)},
                 {"bic_margin", num(gates.bic_margin)},
-                {"fit_quality_factor", num(gates.noise_factor)}};
+                {"fit_quality_factor", num(gates.noise_factor)},
+                {"min_gap_over_floor", num(gates.min_gap_over_floor)}};
   j["runs"] = nlohmann::ordered_json::array();
   for (const auto& run : runs) j["runs"].push_back(run.name);
   j["left_out"] = left_out_json(left_out);

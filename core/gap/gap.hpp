@@ -175,6 +175,9 @@ struct Options {
   /// least this held-out gain, else none is named (fit-quality check: a curve that is not a Magic
   /// Formula makes every candidate nibble at the residual; a real effect takes a large bite).
   double min_first_gain = 0.4;
+  /// An effect is named only where the baseline's held-out gap exceeds this x the noise floor: a
+  /// baseline that already fits within the noise leaves nothing for an effect to explain.
+  double min_gap_over_floor = 1.0;
   double separability =
       0.15;  ///< two candidates whose gains differ less than this are "not separable"
 };
