@@ -353,16 +353,17 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
     current_fit = rep.before;
     current_heldout = rep.gap_before_rmse_n;
   }
-  // Nothing to explain: the baseline's held-out gap is within the noise floor. A candidate may
+  // Nothing to explain: the baseline's held-out gap is within the noise floor (below
+  // min_gap_over_floor x the floor, the floor's own uncertainty allowed for). A candidate may
   // still take a structure smaller than the noise (generator B's null sets under generator A's
   // low gates: load transfer took 12 % of a 4.6 N gap on a 9.8 N floor), but that structure
   // is not shown to be the effect's: it is no larger than what the floor allows.
-  if (!named(chosen).empty() && rep.gap_before_rmse_n <= o.min_gap_over_floor * rep.noise_n) {
+  if (!named(chosen).empty() && rep.gap_before_rmse_n < o.min_gap_over_floor * rep.noise_n) {
     rep.notes.push_back(fmt::format(
-        "the baseline's held-out gap ({:.1f} N) is within the noise floor ({:.1f} N): {} would "
-        "take {:.0f} % of it, but there is nothing to explain beyond the noise, so no effect is "
-        "named",
-        rep.gap_before_rmse_n, rep.noise_n, to_string(named(chosen).front()),
+        "the baseline's held-out gap ({:.1f} N) is within the noise floor ({:.1f} N; under {:.2g} "
+        "x it): {} would take {:.0f} % of it, but there is nothing to explain beyond the noise, "
+        "so no effect is named",
+        rep.gap_before_rmse_n, rep.noise_n, o.min_gap_over_floor, to_string(named(chosen).front()),
         100 * (1 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12))));
     for (auto& e : rep.effects) {
       e.accepted = false;

@@ -115,7 +115,7 @@ class Gap(unittest.TestCase):
             self.assertGreaterEqual(doc["gates"]["gain"], 0.1)
             self.assertEqual(doc["gates"]["fit_quality_factor"], 1.5)  # the default
             # An effect is named only above the floor: the gap before it was more than the noise.
-            self.assertEqual(doc["gates"]["min_gap_over_floor"], 1.0)
+            self.assertEqual(doc["gates"]["min_gap_over_floor"], 0.9)
             self.assertGreater(doc["gap_before_rmse_n"], doc["noise_n"])
             self.assertLess(doc["gap_after_rmse_n"], 1.5 * doc["noise_n"])
             with open(os.path.join(d, "index.html")) as f:
