@@ -232,7 +232,13 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     full.slip.push_back(std::clamp(1.0 - vw[i] / vr[i], -1.0, 1.0));  // below 0: a slip offset
     full.slip_sd.push_back(slip_sd);
   }
-  full.wheel_accel_mps2 = derivative(full.t_s, vw);
+  // Derivatives take their time from the stamps smoothed as the channels are (the sampler's
+  // clock, regular over the window), not from each stamp: a tester's stamps are jittered and
+  // quantised (1 ms), two samples that share a stamp are spread half a step apart, and a
+  // central difference over such a pair read a fifth wheel's 12.3 m/s^2 as 24.6 (generator B,
+  // load transfer seed 101048), which load transfer then read as load.
+  const auto t_clock = smooth(full.t_s, o.smooth_half_window);
+  full.wheel_accel_mps2 = derivative(t_clock, vw);
   // The encoders' angles (trapezoidal integration of speed / radius).
   const double ref_radius_m =
       c.bench == can::BenchKind::Roller ? c.roller_radius_m : c.fifth_wheel_radius_m;
@@ -245,10 +251,10 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     full.ref_angle_rad[i] =
         full.ref_angle_rad[i - 1] + 0.5 * (vr[i] + vr[i - 1]) * dt / ref_radius_m;
   }
-  auto dref = derivative(full.t_s, vr);
+  auto dref = derivative(t_clock, vr);
   for (double& d : dref) d = -d;
   full.ref_decel_mps2 = dref;
-  full.pressure_rate_bar_per_s = derivative(full.t_s, smooth(pressure, o.smooth_half_window));
+  full.pressure_rate_bar_per_s = derivative(t_clock, smooth(pressure, o.smooth_half_window));
   // Start state: the slip rate (a line through the first kInitialWindowS) and the force at the
   // first sample (a line through the first 20 ms: a 250 bar/s ramp adds 170 N in 10 ms, so a mean
   // would sit half of that too high).

@@ -10,6 +10,7 @@
 #include "core/gap/internal.hpp"
 #include "core/pipeline/event_csv.hpp"
 #include "core/pipeline/pipeline.hpp"
+#include "core/rng.hpp"
 
 using namespace brakefit;
 
@@ -318,4 +319,43 @@ TEST(OthersData, TheModelForceIsFilteredAsTheDeclaredChannelWas) {
   for (double x : t) g.push_back(k * (x + 0.01));
   gap::filter_first_order(t, g, tau_s, k * 0.01);
   EXPECT_NEAR(g.back(), k * (t.back() + 0.01 - tau_s), 1e-3 * k);
+}
+
+TEST(OthersData, ADerivativeTakesItsTimeFromTheSamplersClockNotEachJitteredStamp) {
+  // A ground stop exported at 1 kHz with its stamps jittered (0.25 ms) and quantised to 1 ms:
+  // two samples that fall on one stamp are spread half a step apart when read, and a central
+  // difference across such a pair read the fifth wheel's 8 m/s^2 as up to twice that (generator
+  // B: 24.6 for 12.3, which load transfer read as load). The derivatives take their time from
+  // the stamps smoothed as the channels are.
+  std::string csv =
+      "# bench=ground\n# wheel_radius_m=0.3\n# brake_gain_n_per_bar=100\n"
+      "t_s,v_ref_mps,v_wheel_mps,pressure_bar\n";
+  Rng rng(7);
+  double last_stamp = -1;
+  for (int i = 0; i < 1200; ++i) {
+    const double t = i * 1e-3;
+    const double p = std::max(0.0, 100.0 * (t - 0.1));  // 100 bar/s from 0.1 s
+    const double decel = t < 0.2 ? 0.0 : 8.0;           // the vehicle slows from 0.2 s on
+    const double v = 20.0 - decel * (t - 0.2);
+    const double slip = 1e-4 * p;
+    double stamp = std::round((t + 2.5e-4 * rng.normal()) * 1e3) / 1e3;
+    stamp = std::max(stamp, last_stamp);  // a stamp never goes back: it repeats
+    last_stamp = stamp;
+    csv += fmt::format("{:.3f},{:.6f},{:.6f},{:.3f}\n", stamp, v, v * (1 - slip), p);
+  }
+  const auto parsed = pipeline::parse_event_csv(csv, "g.csv");
+  ASSERT_GT(parsed.repeated_stamps, 10u);  // the export has stamps that repeat
+  const auto ev = detect(parsed, true);
+  ASSERT_EQ(ev.size(), 1u);
+  const gap::Run r = gap::condition("g", ev.front(), parsed.calibration, {});
+  double worst = 0;
+  std::size_t points = 0;
+  for (std::size_t i = 0; i < r.t_s.size(); ++i)
+    if (r.t_s[i] > 0.25 && r.t_s[i] < 1.1) {  // past the smoother's reach of the kink and end
+      worst = std::max(worst, std::abs(r.ref_decel_mps2[i] - 8.0));
+      ++points;
+    }
+  ASSERT_GT(points, 100u);
+  // Measured: 0.82 m/s^2 at worst (one point; the rest within 0.3), 7.98 off each stamp.
+  EXPECT_LT(worst, 1.0) << "the deceleration read off the jittered stamps";
 }
