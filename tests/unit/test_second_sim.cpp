@@ -269,27 +269,3 @@ TEST(SecondSim, ARelaxingTyreStartsRollingFreelyAndDoesNotRing) {
     EXPECT_LT(hi - lo, 0.01) << "the wheel rings before the pedal";
   }
 }
-
-TEST(SecondSim, NoEffectIsNamedWhereTheBaselineFitsWithinTheFloor) {
-  // Generator B's ground null sets under generator A's low gates (crossed): load transfer took
-  // 12-14 % of the baseline's held-out gap (dBIC -131 and -155), but that gap, 4.6 and 8.8 N,
-  // was within the noise floor (9.8 and 11.4 N): nothing beyond the noise to explain. With the
-  // rule off (control) the same sets name load_transfer, so the sets test the rule.
-  for (std::uint64_t seed : {101'007u, 101'198u}) {
-    sim::Injection none;
-    none.condition = gap::Condition::Ground;
-    none.generator = sim::Generator::B;
-    gap::Options o = gap::calibrated_options(gap::Condition::Ground);
-    o.bic_margin = 10.2;  // generator A's gates as the referee calibrated them
-    const auto t = sim::run_trial(none, seed, o);
-    EXPECT_EQ(t.verdict, std::vector<std::string>{"none"}) << "seed " << seed;
-    EXPECT_LT(t.gap_before_n, t.noise_n) << "seed " << seed;
-    bool noted = false;
-    for (const auto& n : t.notes) noted |= n.find("within the noise floor") != std::string::npos;
-    EXPECT_TRUE(noted) << "seed " << seed;
-    o.min_gap_over_floor = 0.0;
-    const auto control = sim::run_trial(none, seed, o);
-    ASSERT_FALSE(control.verdict.empty());
-    EXPECT_EQ(control.verdict.front(), "load_transfer") << "seed " << seed;
-  }
-}
