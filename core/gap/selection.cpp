@@ -332,48 +332,44 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
         "gain {:.3f}, dBIC {:.1f}: {}",
         l.round + 1, l.gain, l.delta_bic, l.decision);
   }
+  // Nothing is named after all (a check below vetoes the selection): the note says why.
+  auto veto = [&](std::string note, const char* decision) {
+    rep.notes.push_back(std::move(note));
+    for (auto& e : rep.effects) {
+      e.accepted = false;
+      if (e.decision.rfind("accepted", 0) == 0) e.decision = decision;
+    }
+    chosen = base;
+    current_fit = rep.before;
+    current_heldout = rep.gap_before_rmse_n;
+  };
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
   double first = 0.0;
   for (const auto& e : rep.effects)
     if (named(chosen).size() > 0 && e.effect == named(chosen).front()) first = e.gain;
   if (!named(chosen).empty() && current_heldout > o.noise_factor * rep.noise_n &&
-      first < o.min_first_gain) {
-    rep.notes.push_back(fmt::format(
-        "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are left "
-        "against {:.1f} N of noise: the residual has a structure no candidate explains (is the "
-        "curve a Magic Formula?), so no effect is named",
-        to_string(named(chosen).front()), 100 * first, current_heldout, rep.noise_n));
-    for (auto& e : rep.effects) {
-      e.accepted = false;
-      if (e.decision.rfind("accepted", 0) == 0)
-        e.decision = "passed, but vetoed by the fit-quality check (see the notes)";
-    }
-    chosen = base;
-    current_fit = rep.before;
-    current_heldout = rep.gap_before_rmse_n;
-  }
+      first < o.min_first_gain)
+    veto(fmt::format(
+             "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
+             "left against {:.1f} N of noise: the residual has a structure no candidate explains "
+             "(is the curve a Magic Formula?), so no effect is named",
+             to_string(named(chosen).front()), 100 * first, current_heldout, rep.noise_n),
+         "passed, but vetoed by the fit-quality check (see the notes)");
   // Nothing to explain: the baseline's held-out gap is within the noise floor (below
   // min_gap_over_floor x the floor, the floor's own uncertainty allowed for). A candidate may
-  // still take a structure smaller than the noise (generator B's null sets under generator A's
-  // low gates: load transfer took 12 % of a 4.6 N gap on a 9.8 N floor), but that structure
-  // is not shown to be the effect's: it is no larger than what the floor allows.
-  if (!named(chosen).empty() && rep.gap_before_rmse_n < o.min_gap_over_floor * rep.noise_n) {
-    rep.notes.push_back(fmt::format(
-        "the baseline's held-out gap ({:.1f} N) is within the noise floor ({:.1f} N; under {:.2g} "
-        "x it): {} would take {:.0f} % of it, but there is nothing to explain beyond the noise, "
-        "so no effect is named",
-        rep.gap_before_rmse_n, rep.noise_n, o.min_gap_over_floor, to_string(named(chosen).front()),
-        100 * (1 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12))));
-    for (auto& e : rep.effects) {
-      e.accepted = false;
-      if (e.decision.rfind("accepted", 0) == 0)
-        e.decision = "passed, but the baseline's gap is within the noise floor (see the notes)";
-    }
-    chosen = base;
-    current_fit = rep.before;
-    current_heldout = rep.gap_before_rmse_n;
-  }
+  // still take a structure smaller than the noise past low gates (generator B's ground nulls
+  // under generator A's, before the derivatives took the sampler's clock: load transfer took
+  // 12 % of a 4.6 N gap on a 9.8 N floor), but that is not shown to be the effect's.
+  if (!named(chosen).empty() && rep.gap_before_rmse_n < o.min_gap_over_floor * rep.noise_n)
+    veto(fmt::format(
+             "the baseline's held-out gap ({:.1f} N) is within the noise floor ({:.1f} N; under "
+             "{:.2g} x it): {} would take {:.0f} % of it, but there is nothing to explain beyond "
+             "the noise, so no effect is named",
+             rep.gap_before_rmse_n, rep.noise_n, o.min_gap_over_floor,
+             to_string(named(chosen).front()),
+             100 * (1 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12))),
+         "passed, but the baseline's gap is within the noise floor (see the notes)");
   rep.accepted = chosen;
   rep.after = current_fit;
   rep.gap_after_rmse_n = current_heldout;
