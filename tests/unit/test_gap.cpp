@@ -94,8 +94,8 @@ TEST(Gap, WheelInertiaIsFoundFirst) {
 
 TEST(Gap, NoEffectIsNamedWhereTheBaselineFitsWithinTheFloor) {
   // A wheel inertia whose term the baseline misses, on runs whose floor says more noise than
-  // the baseline's held-out gap (generator B's ground floors sit at 0.36-0.85 x the null sets'
-  // gaps): a candidate passes the gates, but nothing beyond the floor is left to explain.
+  // the baseline's held-out gap (generator B's ground null sets' gaps sit at 0.36-0.85 x their
+  // floors): a candidate passes the gates, but nothing beyond the floor is left to explain.
   sim::Scenario s = scenario("ideal_roller");
   s.effects.pressure_noise_bar = 0.05;
   s.wheel_inertia_kgm2 = 0.5;
