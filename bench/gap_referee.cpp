@@ -156,7 +156,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     const auto& inj = r.truth;
     const std::string said = r.verdict.empty() ? "?" : r.verdict.front();
     ++confusion[inj.effect][said];
-    const double ratio = r.gap_after_n / std::max(r.noise_n, 1e-9);  // gap after / floor
+    const double floor_n = std::max(r.noise_n, 1e-9);
+    const double ratio = r.gap_after_n / floor_n, before_ratio = r.gap_before_n / floor_n;
     // Every miss, to be looked at one by one (trial index: --only keeps it); --why 2: the hits
     // too, with their estimate and the gap left.
     if (!r.exact() || st.why > 1)
@@ -164,9 +165,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
           "[{}] trial {}: {} {:.4g} said {}{}\n", cname, kept[k], inj.effect, inj.magnitude,
           fmt::join(r.verdict, ", "),
           r.exact() ? fmt::format(" (estimate {:.4g}, gap after / floor {:.2f}, before {:.2f})",
-                                  r.estimate, ratio, r.gap_before_n / std::max(r.noise_n, 1e-9))
-                    : fmt::format(" (gap before / floor {:.2f})",
-                                  r.gap_before_n / std::max(r.noise_n, 1e-9)));
+                                  r.estimate, ratio, before_ratio)
+                    : fmt::format(" (gap before / floor {:.2f})", before_ratio));
     if (!r.exact() && st.why)
       for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
     if (said == "refused") {
