@@ -147,7 +147,9 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   std::vector<std::string> labels{"none"};
   for (const auto& e : sim::referee_effects(c, trial_gen)) labels.push_back(e);
   std::map<std::string, std::map<std::string, int>> confusion;
-  std::map<std::string, std::vector<double>> mag_err, after_by_effect;
+  // mag_err: every trial whose report scored the effect (named or not); mag_err_named: the trials
+  // that name it, where the diagnosis claims the magnitude.
+  std::map<std::string, std::vector<double>> mag_err, mag_err_named, after_by_effect;
   std::vector<double> after_over_noise;
   int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0,
       none_exact = 0, refused = 0;
@@ -184,8 +186,12 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     ++n_effects;
     if (r.correct()) ++correct_effects;
     if (r.exact()) ++exact_effects;
-    if (std::isfinite(r.estimate))
-      mag_err[inj.effect].push_back(std::abs(r.estimate - inj.magnitude) / std::abs(inj.magnitude));
+    if (std::isfinite(r.estimate)) {
+      const double err = std::abs(r.estimate - inj.magnitude) / std::abs(inj.magnitude);
+      mag_err[inj.effect].push_back(err);
+      if (std::find(r.verdict.begin(), r.verdict.end(), inj.effect) != r.verdict.end())
+        mag_err_named[inj.effect].push_back(err);
+    }
     if (r.correct()) after_over_noise.push_back(ratio);
     after_by_effect[inj.effect].push_back(ratio);
   }
@@ -234,6 +240,13 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     std::cout << fmt::format(
         "magnitude error, {}: median {:.1f} %, p90 {:.1f} %, within 25 %: {:.0f} %\n", e,
         100 * quantile(v, 0.5), 100 * quantile(v, 0.9), 100 * share);
+  }
+  for (const auto& [e, v] : mag_err_named) {
+    j["magnitude_error_named"][e] = {
+        {"median", quantile(v, 0.5)}, {"p90", quantile(v, 0.9)}, {"trials", v.size()}};
+    std::cout << fmt::format(
+        "magnitude error where named, {}: median {:.1f} %, p90 {:.1f} % ({} trials)\n", e,
+        100 * quantile(v, 0.5), 100 * quantile(v, 0.9), v.size());
   }
   j["gap_after_over_noise"] = {{"median", quantile(after_over_noise, 0.5)},
                                {"p90", quantile(after_over_noise, 0.9)}};

@@ -218,8 +218,13 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   t.verdict = rep.verdict;
   t.notes = rep.notes;
   t.estimate = NAN;
+  // The accepted score's when it was named (forward selection appends it after round 1's).
+  bool accepted = false;
   for (const auto& e : rep.effects)
-    if (inj.effect == gap::to_string(e.effect)) t.estimate = e.params.front().second;
+    if (inj.effect == gap::to_string(e.effect) && (e.accepted || !accepted)) {
+      t.estimate = e.params.front().second;
+      accepted = e.accepted;
+    }
   t.gap_before_n = rep.gap_before_rmse_n;
   t.gap_after_n = rep.gap_after_rmse_n;
   t.noise_n = rep.noise_n;
