@@ -146,8 +146,10 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
       candidates.push_back(e);
   select_effects(rep, runs, candidates, fit, o,
                  "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at "
-                 "other speeds or ramp rates would tell them apart");
+                 "other speeds or ramp rates would tell them apart",
+                 !cap);
   if (!cap) ripple_against_effects(rep, runs, fit, o);
+  measure_load_transfer(rep, runs, fit);
   if (cap) {
     // Found from how the runs end, not fitted: before, the baseline on the whole runs (the
     // runaway at the cap included); after, the baseline on the runs below the cap.
@@ -240,7 +242,8 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
   rep.gap_before_rmse_n = heldout(road, {}, fit);
   rep.where = where_rows(road, rep.before.params, rep.baseline_effects);
   select_effects(rep, road, {kTransferEffects.begin(), kTransferEffects.end()}, fit, o,
-                 "the road runs cannot separate {} from {} (held-out gains {:.3f} and {:.3f})");
+                 "the road runs cannot separate {} from {} (held-out gains {:.3f} and {:.3f})",
+                 false);
   if (capped) {
     // The cradle capped the roller below the tyre's peak: the roller curve is known up to the cap
     // only, and the road above it is no gap of the tyre's. Before: the whole road runs against

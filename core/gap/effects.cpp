@@ -22,6 +22,7 @@ const char* to_string(Effect e) {
       return "slip_offset";
     case Effect::LoadTransfer:
     case Effect::LoadTransferShape:
+    case Effect::LoadTransferMeasured:
       return "load_transfer";
     case Effect::SpeedFriction:
       return "speed_friction";
@@ -95,6 +96,7 @@ EffectParam effect_param(Effect e) {
       return {"slip_offset_ratio", -0.05, 0.05, 0.0};
     case Effect::LoadTransfer:
     case Effect::LoadTransferShape:
+    case Effect::LoadTransferMeasured:
       return {"dfz_per_decel_s2_per_m", -0.2, 0.2, 0.0};
     case Effect::SpeedFriction:
       return {"lambda_mu_v", 0.0, 20.0, 0.1};
@@ -195,9 +197,11 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
           add[i] -= q * r.wheel_accel_mps2[i] / (r.wheel_radius_m * r.wheel_radius_m);
         break;
       case Effect::LoadTransfer:
-      case Effect::LoadTransferShape: {  // Fz grows with the measured deceleration: D by 1 + q a,
-                                         // B C D by (1 + q a)^r, E by e q a
-        const double ratio = p[first + 1];
+      case Effect::LoadTransferShape:
+      case Effect::LoadTransferMeasured: {  // Fz grows with the measured deceleration: D by
+                                            // 1 + q a, B C D by (1 + q a)^r, E by e q a
+        const double ratio =
+            effect == Effect::LoadTransferMeasured ? kPublishedKxLoadRatio : p[first + 1];
         const double e_slope = effect == Effect::LoadTransferShape ? p[first + 2] : 0.0;
         for (std::size_t i = 0; i < n; ++i) {
           const double load = std::max(0.05, 1.0 + q * r.ref_decel_mps2[i]);

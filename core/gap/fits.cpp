@@ -189,6 +189,13 @@ Fit fit_effects(const std::vector<const Run*>& runs, const std::vector<Effect>& 
   return out;
 }
 
+std::vector<const Run*> pointers(const std::vector<Run>& runs) {
+  std::vector<const Run*> out;
+  out.reserve(runs.size());
+  for (const Run& r : runs) out.push_back(&r);
+  return out;
+}
+
 double rmse(const Run& r, const std::vector<double>& params, const std::vector<Effect>& effects) {
   const auto f = predict(r, params, effects);
   double s = 0;

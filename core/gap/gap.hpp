@@ -29,6 +29,11 @@ enum class Effect {
   /// curve's shape (E) is identifiable too (with B, C, D, E free, E absorbs it). Named
   /// "load_transfer" like LoadTransfer.
   LoadTransferShape,
+  /// Not a candidate: load transfer refitted, once named, with the slip stiffness's load ratio
+  /// held at the published tyres' (kPublishedKxLoadRatio) for its magnitude. Runs that end just
+  /// past the peak fix q x ratio (how the stiffness grows with load) much better than q (how the
+  /// peak does); the free ratio still decides whether it is named. Named "load_transfer".
+  LoadTransferMeasured,
   /// Bench vs bench only, found on the roller runs (not fitted): the two-roller cradle capped the
   /// braking force (Fz sin beta), so the roller never showed the tyre above cap_n.
   CradleCap,

@@ -18,6 +18,11 @@ inline constexpr double kLongVl = 16.7;
 /// whole shift instead.
 inline constexpr double kTyreShiftBoundRatio = 5e-4;
 inline constexpr double kTyreShiftBicMargin = 10.0;
+/// d ln Kx / d ln D at the nominal load of published MF 6.1 car and van tyres, (1 + PKX2/PKX1 +
+/// PKX3) / (1 + PDX2/PDX1): the four files sim/second reads give 1.15-1.33 (TNO 205/60R15 1.33,
+/// a van's 1.17). The slip stiffness's load sensitivity over the peak's, at which load
+/// transfer's magnitude is measured (Effect::LoadTransferMeasured).
+inline constexpr double kPublishedKxLoadRatio = 1.25;
 /// The nuisance terms (a slip bias common to the runs), not effects: never named.
 inline bool is_nuisance(Effect e) {
   return e == Effect::ReferenceBias || e == Effect::TyreShift;
@@ -112,11 +117,16 @@ std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector
                                  const std::vector<Effect>& baseline);
 /// A neutral Magic Formula for the runs: D their peak force, C 1.65, E 0, B from the initial slope.
 MfParams neutral_start(const std::vector<Run>& runs);
+/// Load transfer, once named (in rep.accepted), is measured with the stiffness ratio held at the
+/// published tyres' (Effect::LoadTransferMeasured): its score's magnitude becomes that fit's.
+void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit);
 /// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,
 /// gap_before_rmse_n, noise_n); fills effects, accepted, after, gap_after_rmse_n, verdict, notes.
-void select_effects(Report& rep, const std::vector<Run>& runs,
-                    const std::vector<Effect>& candidates, const Fitter& fit, const Options& o,
-                    const char* separability_note);
+/// ripple_per_candidate: the largest gains are scored again with the encoders' ripple estimated
+/// against their own models; runs become the accepted model's.
+void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effect>& candidates,
+                    const Fitter& fit, const Options& o, const char* separability_note,
+                    bool ripple_per_candidate);
 
 /// The verdict from the accepted effects (nuisance terms unnamed) and the gap left after them:
 /// `none` or `unexplained` when none is named, `unexplained` appended when a gap is left.

@@ -1,5 +1,7 @@
 // Ranking and selection: leave-one-run-out error, the gates calibrated per condition, forward
-// selection with the range, separability and fit-quality checks; where the baseline misses.
+// selection with the range, separability, fit-quality and floor checks, each leading candidate
+// scored with the encoders' ripple seen through its own model; load transfer's magnitude
+// measured at the published stiffness ratio.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -20,6 +22,16 @@ namespace brakefit::gap {
 constexpr double kRollerGateGain = 0.10, kRollerBicMargin = 10.0;
 constexpr double kGroundGateGain = 0.10, kGroundBicMargin = 16.0;
 constexpr double kTransferGateGain = 0.22, kTransferBicMargin = 460.0;
+
+/// A candidate's own ripple estimate (own_ripple) is made for the kOwnRippleCandidates largest
+/// gains of a round that reach kOwnRippleGateShare x the gain gate: a ripple read through the
+/// baseline takes part of an effect the baseline cannot bend to (generator B's load transfer,
+/// its load up 70 %: ratio at its bound, 0.47 of the gap; 0.83 against its own ripple), and a
+/// candidate far below the gate has nothing the ripple could have taken. Two passes, as the
+/// baseline's.
+constexpr std::size_t kOwnRippleCandidates = 2;
+constexpr double kOwnRippleGateShare = 0.5;
+constexpr int kOwnRipplePasses = 2;
 
 Options calibrated_options(Condition c, Options base) {
   // Seeds of the null sets 1 000 000+, disjoint from the referee's.
@@ -70,111 +82,69 @@ double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects,
   return std::sqrt(sq / static_cast<double>(runs.size()));
 }
 
-Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params) {
-  const MfParams m{params[0], params[1], params[2], params[3], 0, 0};
-  Floor fl;
-  // RMS over runs of each run's mean square, as the held-out gap weighs its runs.
-  double force_sq = 0, slip_sq = 0, sd_sq = 0;
-  for (const Run& r : runs) {
-    force_sq += r.noise_n * r.noise_n;
-    fl.v_ref_sd_mps += r.v_ref_sd_mps * r.v_ref_sd_mps;
-    fl.v_wheel_sd_mps += r.v_wheel_sd_mps * r.v_wheel_sd_mps;
-    fl.v_ref_step_mps = std::max(fl.v_ref_step_mps, r.v_ref_step_mps);
-    fl.v_wheel_step_mps = std::max(fl.v_wheel_step_mps, r.v_wheel_step_mps);
-    fl.force_step_n = std::max(fl.force_step_n, r.force_step_n);
-    double run_slip_sq = 0, run_sd_sq = 0;
-    const std::size_t points = std::min(r.slip.size(), r.slip_sd.size());
-    for (std::size_t i = 0; i < points; ++i) {
-      const double h = 1e-5;  // dF/dslip of the curve at the point
-      const double slope = (mf_force_n(m, r.slip[i] + h) - mf_force_n(m, r.slip[i] - h)) / (2 * h);
-      run_slip_sq += slope * slope * r.slip_sd[i] * r.slip_sd[i];
-      run_sd_sq += r.slip_sd[i] * r.slip_sd[i];
-    }
-    if (points == 0) continue;
-    slip_sq += run_slip_sq / static_cast<double>(points);
-    sd_sq += run_sd_sq / static_cast<double>(points);
-  }
-  const auto n = static_cast<double>(runs.size());
-  fl.force_n = std::sqrt(force_sq / n);
-  fl.v_ref_sd_mps = std::sqrt(fl.v_ref_sd_mps / n);
-  fl.v_wheel_sd_mps = std::sqrt(fl.v_wheel_sd_mps / n);
-  fl.slip_n = std::sqrt(slip_sq / n);
-  fl.slip_sd_ratio = std::sqrt(sd_sq / n);
-  return fl;
-}
-
-std::vector<const Run*> pointers(const std::vector<Run>& runs) {
-  std::vector<const Run*> out;
-  out.reserve(runs.size());
-  for (const Run& r : runs) out.push_back(&r);
-  return out;
-}
-
-/// Where: residual of the 4-parameter model by slip region, by phase, by run.
-std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params,
-                                 const std::vector<Effect>& baseline) {
-  const MfParams base{params[0], params[1], params[2], params[3], 0, 0};
-  std::vector<WhereRow> out;
-  const double peak_slip = mf_peak(base, 1.0).slip_ratio;
-  std::vector<std::pair<std::string, double>> acc;
-  auto add = [&](const std::string& region, double r2) {
-    for (auto& [name, v] : acc)
-      if (name == region) return void(v += r2);
-    acc.emplace_back(region, r2);
-  };
-  std::vector<std::pair<std::string, std::size_t>> counts;
-  auto count = [&](const std::string& region) {
-    for (auto& [name, v] : counts)
-      if (name == region) return void(++v);
-    counts.emplace_back(region, 1);
-  };
-  double total = 0;
-  for (const Run& r : runs) {
-    const auto f = predict(r, params, baseline);
-    for (std::size_t i = 0; i < f.size(); ++i) {
-      const double r2 = (r.force_n[i] - f[i]) * (r.force_n[i] - f[i]);
-      total += r2;
-      const std::string slip_region = r.slip[i] < 0.5 * peak_slip   ? "linear"
-                                      : r.slip[i] < 1.5 * peak_slip ? "near_peak"
-                                                                    : "after_peak";
-      const std::string phase = r.pressure_rate_bar_per_s[i] >= 0 ? "apply" : "release";
-      for (const std::string& reg : {slip_region, "phase:" + phase, "run:" + r.name}) {
-        add(reg, r2);
-        count(reg);
+/// The encoders' ripple estimated against a candidate's model instead of the baseline: from the
+/// slip as conditioned, refitted and estimated again (as the baseline's is), each run's
+/// reference bias levelled again. Empty when the runs carry no ripple estimate to redo.
+static std::vector<Run> own_ripple(const std::vector<Run>& runs, const std::vector<Effect>& model,
+                                   const Fit& start_fit, const Fitter& fit) {
+  if (std::none_of(runs.begin(), runs.end(),
+                   [](const Run& r) { return !r.slip_as_conditioned.empty(); }))
+    return {};
+  std::vector<Run> own = runs;
+  Fit f = start_fit;
+  for (int pass = 0; pass < kOwnRipplePasses; ++pass) {
+    if (pass > 0) f = fit(pointers(own), model);
+    if (remove_encoder_ripple(own, f.params, model).empty())
+      for (Run& r : own) {  // none against this model: the slip as conditioned, levelled since
+        if (r.slip_as_conditioned.empty()) continue;
+        r.slip = r.slip_as_conditioned;
+        for (double& x : r.slip) x -= r.ref_bias_removed - r.ref_bias_as_conditioned;
+        r.slip_sd = r.slip_sd_as_conditioned;
+        r.wheel_accel_mps2 = r.wheel_accel_as_conditioned;
+        r.ref_decel_mps2 = r.ref_decel_as_conditioned;
       }
-    }
+    level_reference_biases(own);
   }
-  for (std::size_t k = 0; k < acc.size(); ++k)
-    out.push_back({acc[k].first, std::sqrt(acc[k].second / static_cast<double>(counts[k].second)),
-                   total > 0 ? acc[k].second / total : 0.0});
-
-  return out;
+  return own;
 }
 
-/// A neutral Magic Formula for the runs: D their peak force, C 1.65, E 0, B from the slope of the
-/// force over slip below 30 % of the peak (B C D = the slip stiffness).
-MfParams neutral_start(const std::vector<Run>& runs) {
-  double peak = 0;
-  for (const Run& r : runs)
-    for (double f : r.force_n) peak = std::max(peak, f);
-  double sxy = 0, sxx = 0;  // slope through the origin
-  for (const Run& r : runs)
-    for (std::size_t i = 0; i < r.slip.size(); ++i)
-      if (r.force_n[i] < 0.3 * peak && r.slip[i] > 0) {
-        sxy += r.slip[i] * r.force_n[i];
-        sxx += r.slip[i] * r.slip[i];
-      }
-  MfParams m{10.0, 1.65, std::max(peak, 1.0), 0.0, 0, 0};
-  if (sxx > 0 && sxy > 0) m.B = std::clamp(sxy / sxx / (m.C * m.D), 1.0, 100.0);
-  return m;
+/// Load transfer, once named, is measured with the stiffness ratio held at the published tyres'
+/// (Effect::LoadTransferMeasured): its score's magnitude is that fit's q; the free fit's q stays
+/// beside it (dfz_per_decel_free_ratio_s2_per_m). Its free ratio has decided the naming (inside
+/// its range) and its fit stays the model's: a note says both.
+void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit) {
+  const std::vector<Effect>& chosen = rep.accepted;
+  const auto lt = std::find(chosen.begin(), chosen.end(), Effect::LoadTransfer);
+  if (lt == chosen.end()) return;
+  std::vector<Effect> model = chosen;
+  model[static_cast<std::size_t>(lt - chosen.begin())] = Effect::LoadTransferMeasured;
+  std::size_t at = 4;
+  for (auto e = model.begin(); *e != Effect::LoadTransferMeasured; ++e)
+    at += effect_params(*e).size();
+  const double q = fit(pointers(runs), model).params.at(at);
+  for (auto& e : rep.effects) {
+    if (e.effect != Effect::LoadTransfer || !e.accepted || e.params.size() < 2) continue;
+    const double q_free = e.params[0].second, ratio = e.params[1].second;
+    e.params[0].second = q;
+    e.params.emplace_back("dfz_per_decel_free_ratio_s2_per_m", q_free);
+    rep.notes.push_back(fmt::format(
+        "load_transfer's magnitude, {:.4g} per m/s^2, is measured with the slip stiffness's load "
+        "ratio held at published MF 6.1 tyres' ({:.2f}; 1.15-1.33): the runs end just past the "
+        "peak and fix the stiffness's load sensitivity (q x ratio) better than q; the free fit "
+        "says {:.4g} at a ratio of {:.2f}",
+        q, kPublishedKxLoadRatio, q_free, ratio));
+  }
 }
 
 /// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,
 /// gap_before_rmse_n, noise_n); fills effects, accepted, after, gap_after_rmse_n, verdict, notes.
-void select_effects(Report& rep, const std::vector<Run>& runs,
-                    const std::vector<Effect>& candidates, const Fitter& fit, const Options& o,
-                    const char* separability_note) {
-  const std::vector<const Run*> all = pointers(runs);
+void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effect>& candidates,
+                    const Fitter& fit, const Options& o, const char* separability_note,
+                    bool ripple_per_candidate) {
+  std::vector<const Run*> all = pointers(runs);
+  // The runs as they came (the baseline's ripple): restored if a veto undoes the selection.
+  const std::vector<Run> entry_runs = ripple_per_candidate ? runs : std::vector<Run>{};
+  bool own_taken = false;
   // The slip the nuisance terms account for: half a step of a constant quantised reference, and
   // the tyre's own shift when the baseline carries it.
   const double resolution = nuisance_bias_bound(all, rep.baseline_effects);
@@ -233,6 +203,34 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
       models.push_back(std::move(model));
     }
     if (scores.empty()) break;
+    // The largest gains scored again with the encoders' ripple estimated against their own
+    // models (own_ripple); kept where that lowers the held-out error.
+    std::vector<std::vector<Run>> own_runs(scores.size());
+    std::vector<double> through_baseline(scores.size(), NAN);  // held-out, the baseline's ripple
+    if (ripple_per_candidate) {
+      std::vector<std::size_t> by_gain(scores.size());
+      std::iota(by_gain.begin(), by_gain.end(), 0);
+      std::sort(by_gain.begin(), by_gain.end(),
+                [&](std::size_t a, std::size_t b) { return scores[a].gain > scores[b].gain; });
+      for (std::size_t k = 0; k < std::min(kOwnRippleCandidates, by_gain.size()); ++k) {
+        const std::size_t i = by_gain[k];
+        if (scores[i].gain < kOwnRippleGateShare * o.gate_gain) break;
+        std::vector<Run> own = own_ripple(runs, models[i], fits[i], fit);
+        if (own.empty()) break;
+        const double e_own = heldout(own, models[i], fit);
+        if (e_own >= scores[i].heldout_rmse_after_n) continue;
+        Fit f = fit(pointers(own), models[i]);
+        EffectScore& sc = scores[i];
+        through_baseline[i] = sc.heldout_rmse_after_n;
+        sc.heldout_rmse_after_n = e_own;
+        sc.gain = 1.0 - e_own / std::max(current_heldout, 1e-12);
+        sc.delta_bic = f.bic() - current_fit.bic();
+        for (std::size_t j = 0; j < sc.params.size(); ++j)
+          sc.params[j].second = f.params[f.params.size() - sc.params.size() + j];
+        fits[i] = std::move(f);
+        own_runs[i] = std::move(own);
+      }
+    }
     std::vector<std::size_t> order(scores.size());
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(),
@@ -318,6 +316,16 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
     const EffectScore& best = scores[order[pick]];
     if (round > 0) rep.effects.push_back(best);
     chosen = models[order[pick]];
+    if (!own_runs[order[pick]].empty()) {  // the accepted model's ripple is the runs' from now on
+      runs = std::move(own_runs[order[pick]]);
+      all = pointers(runs);
+      own_taken = true;
+      rep.notes.push_back(fmt::format(
+          "{} was scored with the encoders' ripple estimated against its own model: held-out "
+          "{:.1f} N ({:.1f} N through the baseline's estimate of the ripple, which took part of "
+          "its bend)",
+          to_string(best.effect), best.heldout_rmse_after_n, through_baseline[order[pick]]));
+    }
     current_heldout = best.heldout_rmse_after_n;
     current_fit = fits[order[pick]];
   }
@@ -342,6 +350,11 @@ void select_effects(Report& rep, const std::vector<Run>& runs,
     chosen = base;
     current_fit = rep.before;
     current_heldout = rep.gap_before_rmse_n;
+    if (own_taken) {
+      runs = entry_runs;
+      all = pointers(runs);
+      own_taken = false;
+    }
   };
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.

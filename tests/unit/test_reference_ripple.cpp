@@ -68,9 +68,11 @@ TEST(ReferenceRipple, LoadTransferOnRunsWithARipplingFifthWheelIsNamed) {
   // fifth wheel ripples (seed 1: 4.3e-4). Read from the force residual, the ripple took a third
   // of load transfer's bend and its derivative (0.6 m/s^2 at 70 km/h) was read as load: seed 1
   // said unexplained with q 0.013 for 0.0445 with that ripple alone. Read from the fifth wheel's
-  // own speed it is named, 0.046. (Seeds 2 and 3 are still missed: load transfer takes its
-  // stiffness ratio to the end of its range there; the wheel's own ripple is still estimated from
-  // the force residual. The ripple is read from the speed in every one of them.)
+  // own speed it is named (its magnitude measured at the published stiffness ratio: 0.041 for
+  // 0.0445). Seed 2 (load up 70 %) took its stiffness ratio to the end of its range while the
+  // wheel's ripple was read through the baseline; scored against its own ripple it is named,
+  // 0.044 for 0.054 (a gap is left: `unexplained` follows). Seed 3 is still missed (slip_offset
+  // first). The fifth wheel's ripple is read from its speed in every one of them.
   for (std::uint64_t seed : {1u, 2u, 3u}) {
     const sim::Injection inj{"load_transfer", 0.04, gap::Condition::Ground, sim::Generator::B};
     const auto t = sim::run_trial(inj, seed, gap::calibrated_options(gap::Condition::Ground));
@@ -78,8 +80,9 @@ TEST(ReferenceRipple, LoadTransferOnRunsWithARipplingFifthWheelIsNamed) {
     bool read = false;
     for (const auto& n : t.notes) read |= n.find("read from its own speed") != std::string::npos;
     EXPECT_TRUE(read) << "seed " << seed;
-    if (seed != 1) continue;
-    EXPECT_EQ(t.verdict.front(), "load_transfer");
-    EXPECT_NEAR(t.estimate, t.truth.magnitude, 0.1 * t.truth.magnitude);
+    if (seed == 3) continue;
+    EXPECT_EQ(t.verdict.front(), "load_transfer") << "seed " << seed;
+    EXPECT_NEAR(t.estimate, t.truth.magnitude, (seed == 1 ? 0.1 : 0.2) * t.truth.magnitude)
+        << "seed " << seed;
   }
 }

@@ -1,0 +1,106 @@
+// What the baseline leaves: the noise floor it is judged against (the force channel's noise and
+// the slip noise through the curve's slope), where its residual sits, and a neutral start that its
+// distortion cannot trap.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+
+namespace brakefit::gap {
+
+Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params) {
+  const MfParams m{params[0], params[1], params[2], params[3], 0, 0};
+  Floor fl;
+  // RMS over runs of each run's mean square, as the held-out gap weighs its runs.
+  double force_sq = 0, slip_sq = 0, sd_sq = 0;
+  for (const Run& r : runs) {
+    force_sq += r.noise_n * r.noise_n;
+    fl.v_ref_sd_mps += r.v_ref_sd_mps * r.v_ref_sd_mps;
+    fl.v_wheel_sd_mps += r.v_wheel_sd_mps * r.v_wheel_sd_mps;
+    fl.v_ref_step_mps = std::max(fl.v_ref_step_mps, r.v_ref_step_mps);
+    fl.v_wheel_step_mps = std::max(fl.v_wheel_step_mps, r.v_wheel_step_mps);
+    fl.force_step_n = std::max(fl.force_step_n, r.force_step_n);
+    double run_slip_sq = 0, run_sd_sq = 0;
+    const std::size_t points = std::min(r.slip.size(), r.slip_sd.size());
+    for (std::size_t i = 0; i < points; ++i) {
+      const double h = 1e-5;  // dF/dslip of the curve at the point
+      const double slope = (mf_force_n(m, r.slip[i] + h) - mf_force_n(m, r.slip[i] - h)) / (2 * h);
+      run_slip_sq += slope * slope * r.slip_sd[i] * r.slip_sd[i];
+      run_sd_sq += r.slip_sd[i] * r.slip_sd[i];
+    }
+    if (points == 0) continue;
+    slip_sq += run_slip_sq / static_cast<double>(points);
+    sd_sq += run_sd_sq / static_cast<double>(points);
+  }
+  const auto n = static_cast<double>(runs.size());
+  fl.force_n = std::sqrt(force_sq / n);
+  fl.v_ref_sd_mps = std::sqrt(fl.v_ref_sd_mps / n);
+  fl.v_wheel_sd_mps = std::sqrt(fl.v_wheel_sd_mps / n);
+  fl.slip_n = std::sqrt(slip_sq / n);
+  fl.slip_sd_ratio = std::sqrt(sd_sq / n);
+  return fl;
+}
+
+/// Where: residual of the 4-parameter model by slip region, by phase, by run.
+std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params,
+                                 const std::vector<Effect>& baseline) {
+  const MfParams base{params[0], params[1], params[2], params[3], 0, 0};
+  std::vector<WhereRow> out;
+  const double peak_slip = mf_peak(base, 1.0).slip_ratio;
+  std::vector<std::pair<std::string, double>> acc;
+  auto add = [&](const std::string& region, double r2) {
+    for (auto& [name, v] : acc)
+      if (name == region) return void(v += r2);
+    acc.emplace_back(region, r2);
+  };
+  std::vector<std::pair<std::string, std::size_t>> counts;
+  auto count = [&](const std::string& region) {
+    for (auto& [name, v] : counts)
+      if (name == region) return void(++v);
+    counts.emplace_back(region, 1);
+  };
+  double total = 0;
+  for (const Run& r : runs) {
+    const auto f = predict(r, params, baseline);
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const double r2 = (r.force_n[i] - f[i]) * (r.force_n[i] - f[i]);
+      total += r2;
+      const std::string slip_region = r.slip[i] < 0.5 * peak_slip   ? "linear"
+                                      : r.slip[i] < 1.5 * peak_slip ? "near_peak"
+                                                                    : "after_peak";
+      const std::string phase = r.pressure_rate_bar_per_s[i] >= 0 ? "apply" : "release";
+      for (const std::string& reg : {slip_region, "phase:" + phase, "run:" + r.name}) {
+        add(reg, r2);
+        count(reg);
+      }
+    }
+  }
+  for (std::size_t k = 0; k < acc.size(); ++k)
+    out.push_back({acc[k].first, std::sqrt(acc[k].second / static_cast<double>(counts[k].second)),
+                   total > 0 ? acc[k].second / total : 0.0});
+
+  return out;
+}
+
+/// A neutral Magic Formula for the runs: D their peak force, C 1.65, E 0, B from the slope of the
+/// force over slip below 30 % of the peak (B C D = the slip stiffness).
+MfParams neutral_start(const std::vector<Run>& runs) {
+  double peak = 0;
+  for (const Run& r : runs)
+    for (double f : r.force_n) peak = std::max(peak, f);
+  double sxy = 0, sxx = 0;  // slope through the origin
+  for (const Run& r : runs)
+    for (std::size_t i = 0; i < r.slip.size(); ++i)
+      if (r.force_n[i] < 0.3 * peak && r.slip[i] > 0) {
+        sxy += r.slip[i] * r.force_n[i];
+        sxx += r.slip[i] * r.slip[i];
+      }
+  MfParams m{10.0, 1.65, std::max(peak, 1.0), 0.0, 0, 0};
+  if (sxx > 0 && sxy > 0) m.B = std::clamp(sxy / sxx / (m.C * m.D), 1.0, 100.0);
+  return m;
+}
+
+}  // namespace brakefit::gap
