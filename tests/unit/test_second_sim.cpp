@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <tuple>
 
 #include "core/curve.hpp"
@@ -15,6 +16,21 @@
 #include "sim/second/tyre.hpp"
 
 using namespace brakefit;
+
+namespace {
+
+/// Generator B's roller set of `seed` with the effect injected, diagnosed under the shipped roller
+/// gates: its first verdict is the effect and its estimate within `tolerance` (relative).
+sim::TrialResult named_on_b_roller(const std::string& effect, double magnitude, std::uint64_t seed,
+                                   double tolerance) {
+  const sim::Injection inj{effect, magnitude, gap::Condition::Roller, sim::Generator::B};
+  auto t = sim::run_trial(inj, seed, gap::calibrated_options(gap::Condition::Roller));
+  EXPECT_EQ(t.verdict.empty() ? "" : t.verdict.front(), effect);
+  EXPECT_NEAR(t.estimate, magnitude, tolerance * magnitude);
+  return t;
+}
+
+}  // namespace
 
 TEST(Tir, SectionsCommentsStringsAndFortranExponents) {
   const auto f = sim2::parse_tir(
@@ -232,11 +248,7 @@ TEST(SecondSim, TheRippleIsSeenThroughTheNamedEffectsModel) {
   // smaller. Estimated again against the relaxation with the baseline's columns (K (1 - s) of
   // the slip), the ripple's refit left 36.1 N against a 6.6 N floor (9.8 N before it):
   // `unexplained`. The columns are the model's own answer to a slip ripple: 8.6 N.
-  const sim::Injection inj{"relaxation_length", 0.3285, gap::Condition::Roller, sim::Generator::B};
-  const auto t = sim::run_trial(inj, 1022, gap::calibrated_options(gap::Condition::Roller));
-  ASSERT_FALSE(t.verdict.empty());
-  EXPECT_EQ(t.verdict.front(), "relaxation_length");
-  EXPECT_NEAR(t.estimate, 0.3285, 0.05 * 0.3285);
+  const auto t = named_on_b_roller("relaxation_length", 0.3285, 1022, 0.05);
   EXPECT_EQ(std::count(t.verdict.begin(), t.verdict.end(), "unexplained"), 0);
   EXPECT_LT(t.gap_after_n, 1.5 * t.noise_n) << "floor " << t.noise_n << " N";
 }
@@ -246,11 +258,7 @@ TEST(SecondSim, ALeadingCandidateIsScoredWithTheRippleSeenThroughItsOwnModel) {
   // ripple read through the baseline took part of the inertia's term into the slip, and the
   // inertia then explained 30 % of the gap: `unexplained`. Scored with the ripple estimated
   // against its own model it takes half of it and is named, 2.18 kg m^2.
-  const sim::Injection inj{"wheel_inertia", 2.108, gap::Condition::Roller, sim::Generator::B};
-  const auto t = sim::run_trial(inj, 1134, gap::calibrated_options(gap::Condition::Roller));
-  ASSERT_FALSE(t.verdict.empty());
-  EXPECT_EQ(t.verdict.front(), "wheel_inertia");
-  EXPECT_NEAR(t.estimate, 2.108, 0.1 * 2.108);
+  const auto t = named_on_b_roller("wheel_inertia", 2.108, 1134, 0.1);
   EXPECT_LT(t.gap_after_n, 0.6 * t.gap_before_n);
   bool own = false;
   for (const auto& n : t.notes) own |= n.find("against its own model") != std::string::npos;
