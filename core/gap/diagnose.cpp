@@ -160,11 +160,8 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         "two-roller cradle caps it at Fz sin beta); the samples from 98 % of the cap on (the "
         "runaway) are left out, and B, C, D, E describe the curve only up to that force",
         cap->cap_n, 100 * cap->spread, 100 * cap->end_slope_ratio));
-  } else if (const auto it = std::find(rep.accepted.begin(), rep.accepted.end(), Effect::CradleCap);
-             it != rep.accepted.end()) {
-    std::size_t at = 4;
-    for (auto e = rep.accepted.begin(); e != it; ++e) at += effect_params(*e).size();
-    rep.cap_n = rep.after.params[at];
+  } else if (const auto at = param_offset(rep.accepted, Effect::CradleCap)) {
+    rep.cap_n = rep.after.params[*at];
   }
   if (std::find(rep.accepted.begin(), rep.accepted.end(), Effect::LoadTransfer) !=
       rep.accepted.end())

@@ -2,6 +2,7 @@
 // adds them to the Magic Formula (shared/docs/physics.md section 3).
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
@@ -73,6 +74,15 @@ std::size_t param_count(const std::vector<Effect>& effects) {
   std::size_t n = 4;
   for (Effect e : effects) n += effect_params(e).size();
   return n;
+}
+
+std::optional<std::size_t> param_offset(const std::vector<Effect>& model, Effect e) {
+  std::size_t at = 4;
+  for (Effect m : model) {
+    if (m == e) return at;
+    at += effect_params(m).size();
+  }
+  return std::nullopt;
 }
 
 std::vector<std::string> param_names(const std::vector<Effect>& effects) {

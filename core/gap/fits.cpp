@@ -95,15 +95,8 @@ double nuisance_bias_bound(const std::vector<const Run*>& runs, const std::vecto
 
 bool tyre_shift_inside(const Fit& f, const std::vector<Effect>& model,
                        const std::vector<const Run*>& runs) {
-  std::size_t at = 4;
-  for (Effect e : model) {
-    if (e == Effect::TyreShift) {
-      const double bound = nuisance_bias_bound(runs, model);
-      return std::abs(f.params.at(at)) < 0.99 * bound;
-    }
-    at += effect_params(e).size();
-  }
-  return true;
+  const auto at = param_offset(model, Effect::TyreShift);
+  return !at || std::abs(f.params.at(*at)) < 0.99 * nuisance_bias_bound(runs, model);
 }
 
 std::vector<Effect> without_tyre_shift(const std::vector<Effect>& model,

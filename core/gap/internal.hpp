@@ -27,6 +27,9 @@ inline constexpr double kPublishedKxLoadRatio = 1.25;
 inline bool is_nuisance(Effect e) {
   return e == Effect::ReferenceBias || e == Effect::TyreShift;
 }
+/// Where e's first parameter sits in the params of a fit of model (after B, C, D, E and the
+/// effects before it); nothing when the model lacks it.
+std::optional<std::size_t> param_offset(const std::vector<Effect>& model, Effect e);
 /// The slip bias the nuisance terms of a model may take: half a quantisation step of a constant
 /// reference, and the tyre's shift when the model carries it (unless slip_offset takes it).
 double nuisance_bias_bound(const std::vector<const Run*>& runs, const std::vector<Effect>& model);
@@ -103,9 +106,13 @@ std::string level_reference_biases(std::vector<Run>& runs);
 
 /// Estimates each run's once-per-revolution encoder ripple (wheel and reference, for runs that
 /// span 1.5 revolutions) from the residual of the baseline (params, with its nuisance terms)
-/// and takes it out of the slip. Returns a note (empty: none found).
+/// and takes it out of the slip. Returns a note (empty: none found). When none is found the runs
+/// keep what the previous estimate left (KeepPrevious), or go back to the slip as conditioned
+/// (AsConditioned: a candidate's own estimate must not keep the baseline's).
+enum class WhenNoRipple { KeepPrevious, AsConditioned };
 std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<double>& params,
-                                  const std::vector<Effect>& baseline);
+                                  const std::vector<Effect>& baseline,
+                                  WhenNoRipple none = WhenNoRipple::KeepPrevious);
 
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;

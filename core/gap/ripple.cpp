@@ -243,7 +243,7 @@ void take_out_reference_ripple(Run& r, double c, double s) {
 }
 
 std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<double>& params,
-                                  const std::vector<Effect>& baseline) {
+                                  const std::vector<Effect>& baseline, WhenNoRipple none) {
   const Model model{params, baseline};
   struct Prepared {
     std::vector<double> residual;
@@ -385,7 +385,9 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   }
   if (corrected == 0 && uncorrected == 0) {
     // Nothing found this time (an estimate's narrow-band test can fail against a refitted
-    // baseline): the runs stay as the previous estimate left them.
+    // baseline): the runs stay as the previous estimate left them, or as conditioned (the state
+    // they are in here).
+    if (none == WhenNoRipple::AsConditioned) return {};
     for (std::size_t k = 0; k < runs.size(); ++k) {
       runs[k].slip = std::move(on_entry[k].slip);
       runs[k].slip_sd = std::move(on_entry[k].slip_sd);

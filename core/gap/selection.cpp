@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
@@ -94,15 +95,7 @@ static std::vector<Run> own_ripple(const std::vector<Run>& runs, const std::vect
   Fit f = start_fit;
   for (int pass = 0; pass < kOwnRipplePasses; ++pass) {
     if (pass > 0) f = fit(pointers(own), model);
-    if (remove_encoder_ripple(own, f.params, model).empty())
-      for (Run& r : own) {  // none against this model: the slip as conditioned, levelled since
-        if (r.slip_as_conditioned.empty()) continue;
-        r.slip = r.slip_as_conditioned;
-        for (double& x : r.slip) x -= r.ref_bias_removed - r.ref_bias_as_conditioned;
-        r.slip_sd = r.slip_sd_as_conditioned;
-        r.wheel_accel_mps2 = r.wheel_accel_as_conditioned;
-        r.ref_decel_mps2 = r.ref_decel_as_conditioned;
-      }
+    remove_encoder_ripple(own, f.params, model, WhenNoRipple::AsConditioned);
     level_reference_biases(own);
   }
   return own;
@@ -113,15 +106,11 @@ static std::vector<Run> own_ripple(const std::vector<Run>& runs, const std::vect
 /// beside it (dfz_per_decel_free_ratio_s2_per_m). Its free ratio has decided the naming (inside
 /// its range) and its fit stays the model's: a note says both.
 void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit) {
-  const std::vector<Effect>& chosen = rep.accepted;
-  const auto lt = std::find(chosen.begin(), chosen.end(), Effect::LoadTransfer);
-  if (lt == chosen.end()) return;
-  std::vector<Effect> model = chosen;
-  model[static_cast<std::size_t>(lt - chosen.begin())] = Effect::LoadTransferMeasured;
-  std::size_t at = 4;
-  for (auto e = model.begin(); *e != Effect::LoadTransferMeasured; ++e)
-    at += effect_params(*e).size();
-  const double q = fit(pointers(runs), model).params.at(at);
+  std::vector<Effect> model = rep.accepted;
+  const auto lt = std::find(model.begin(), model.end(), Effect::LoadTransfer);
+  if (lt == model.end()) return;
+  *lt = Effect::LoadTransferMeasured;
+  const double q = fit(pointers(runs), model).params.at(*param_offset(model, *lt));
   for (auto& e : rep.effects) {
     if (e.effect != Effect::LoadTransfer || !e.accepted || e.params.size() < 2) continue;
     const double q_free = e.params[0].second, ratio = e.params[1].second;
@@ -142,9 +131,9 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
                     const Fitter& fit, const Options& o, const char* separability_note,
                     bool ripple_per_candidate) {
   std::vector<const Run*> all = pointers(runs);
-  // The runs as they came (the baseline's ripple): restored if a veto undoes the selection.
-  const std::vector<Run> entry_runs = ripple_per_candidate ? runs : std::vector<Run>{};
-  bool own_taken = false;
+  // The runs as they came (the baseline's ripple), kept once an accepted candidate's own ripple
+  // replaces them: restored if a veto undoes the selection.
+  std::optional<std::vector<Run>> entry_runs;
   // The slip the nuisance terms account for: half a step of a constant quantised reference, and
   // the tyre's own shift when the baseline carries it.
   const double resolution = nuisance_bias_bound(all, rep.baseline_effects);
@@ -203,17 +192,21 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       models.push_back(std::move(model));
     }
     if (scores.empty()) break;
+    auto by_gain = [&] {  // the scores' indices, largest gain first
+      std::vector<std::size_t> order(scores.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::sort(order.begin(), order.end(),
+                [&](std::size_t a, std::size_t b) { return scores[a].gain > scores[b].gain; });
+      return order;
+    };
     // The largest gains scored again with the encoders' ripple estimated against their own
     // models (own_ripple); kept where that lowers the held-out error.
     std::vector<std::vector<Run>> own_runs(scores.size());
     std::vector<double> through_baseline(scores.size(), NAN);  // held-out, the baseline's ripple
     if (ripple_per_candidate) {
-      std::vector<std::size_t> by_gain(scores.size());
-      std::iota(by_gain.begin(), by_gain.end(), 0);
-      std::sort(by_gain.begin(), by_gain.end(),
-                [&](std::size_t a, std::size_t b) { return scores[a].gain > scores[b].gain; });
-      for (std::size_t k = 0; k < std::min(kOwnRippleCandidates, by_gain.size()); ++k) {
-        const std::size_t i = by_gain[k];
+      const std::vector<std::size_t> leading = by_gain();
+      for (std::size_t k = 0; k < std::min(kOwnRippleCandidates, leading.size()); ++k) {
+        const std::size_t i = leading[k];
         if (scores[i].gain < kOwnRippleGateShare * o.gate_gain) break;
         std::vector<Run> own = own_ripple(runs, models[i], fits[i], fit);
         if (own.empty()) break;
@@ -231,10 +224,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
         own_runs[i] = std::move(own);
       }
     }
-    std::vector<std::size_t> order(scores.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return scores[a].gain > scores[b].gain; });
+    const std::vector<std::size_t> order = by_gain();
     auto passes = [&](const EffectScore& e) {
       return e.gain >= o.gate_gain && e.delta_bic <= -o.bic_margin;
     };
@@ -317,9 +307,9 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
     if (round > 0) rep.effects.push_back(best);
     chosen = models[order[pick]];
     if (!own_runs[order[pick]].empty()) {  // the accepted model's ripple is the runs' from now on
+      if (!entry_runs) entry_runs = std::move(runs);
       runs = std::move(own_runs[order[pick]]);
       all = pointers(runs);
-      own_taken = true;
       rep.notes.push_back(fmt::format(
           "{} was scored with the encoders' ripple estimated against its own model: held-out "
           "{:.1f} N ({:.1f} N through the baseline's estimate of the ripple, which took part of "
@@ -350,10 +340,10 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
     chosen = base;
     current_fit = rep.before;
     current_heldout = rep.gap_before_rmse_n;
-    if (own_taken) {
-      runs = entry_runs;
+    if (entry_runs) {
+      runs = std::move(*entry_runs);
+      entry_runs.reset();
       all = pointers(runs);
-      own_taken = false;
     }
   };
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
