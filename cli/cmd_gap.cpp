@@ -84,7 +84,9 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
                 {"v_wheel_sd_mps", num(r.floor.v_wheel_sd_mps)},
                 {"v_ref_step_mps", num(r.floor.v_ref_step_mps)},
                 {"v_wheel_step_mps", num(r.floor.v_wheel_step_mps)},
-                {"force_step_n", num(r.floor.force_step_n)}};
+                {"force_step_n", num(r.floor.force_step_n)},
+                {"borrowed_runs", r.floor.borrowed_runs},
+                {"borrowed_speed_noise_mps", num(r.floor.borrowed_speed_noise_mps)}};
   j["gap_before_rmse_n"] = num(r.gap_before_rmse_n);
   j["gap_after_rmse_n"] = num(r.gap_after_rmse_n);
   j["fraction_explained"] =
@@ -323,10 +325,11 @@ void add_gap_command(CLI::App& app) {
     if (std::isfinite(o->gate_gain)) gap_options.gate_gain = o->gate_gain;
     if (std::isfinite(o->bic_margin)) gap_options.bic_margin = o->bic_margin;
     if (std::isfinite(o->fit_quality_factor)) gap_options.noise_factor = o->fit_quality_factor;
-    spdlog::info("gap: condition {}, gates: held-out gain >= {:.3f}, BIC drop >= {:.1f}, "
-                 "fit-quality factor {:.2f}",
-                 gap::to_string(condition), gap_options.gate_gain, gap_options.bic_margin,
-                 gap_options.noise_factor);
+    spdlog::info(
+        "gap: condition {}, gates: held-out gain >= {:.3f}, BIC drop >= {:.1f}, "
+        "fit-quality factor {:.2f}",
+        gap::to_string(condition), gap_options.gate_gain, gap_options.bic_margin,
+        gap_options.noise_factor);
     const gap::Report rep =
         transfer ? gap::diagnose_transfer(roller_runs, runs, seed.params, gap_options)
                  : gap::diagnose(runs, seed.params, gap_options);

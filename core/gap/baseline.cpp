@@ -1,6 +1,8 @@
 // What the baseline leaves: the noise floor it is judged against (the force channel's noise and
 // the slip noise through the curve's slope), where its residual sits, and a neutral start that its
 // distortion cannot trap.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -11,9 +13,32 @@
 
 namespace brakefit::gap {
 
+namespace {
+
+double mean_speed_mps(const Run& r) {
+  double v = 0;
+  for (double x : r.v_ref_mps) v += x / static_cast<double>(r.v_ref_mps.size());
+  return v;
+}
+
+}  // namespace
+
 Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params) {
   const MfParams m{params[0], params[1], params[2], params[3], 0, 0};
   Floor fl;
+  // The slip's noise is measured on the run's own slip (4 wide windows: 130 samples at 1 kHz).
+  // Shorter runs (a 60 bar/s roller stop of generator B's relaxing tyre lasts 50 ms, a ground
+  // run at 500 Hz 0.2 s) were counted noise-free: their floor was the force's alone. They take
+  // the measured runs' speed noise (slip noise times speed: the instruments', the same in every
+  // run of a set) at their own speed, as the measured runs have it now (with the encoders'
+  // ripple out, when it was taken out since).
+  int measured = 0;
+  for (const Run& r : runs)
+    if (!r.slip_sd_unmeasured && !r.slip_sd.empty() && !r.v_ref_mps.empty()) {
+      fl.borrowed_speed_noise_mps += r.slip_sd.front() * mean_speed_mps(r);
+      ++measured;
+    }
+  if (measured > 0) fl.borrowed_speed_noise_mps /= measured;
   // RMS over runs of each run's mean square, as the held-out gap weighs its runs.
   double force_sq = 0, slip_sq = 0, sd_sq = 0;
   for (const Run& r : runs) {
@@ -25,11 +50,16 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
     fl.force_step_n = std::max(fl.force_step_n, r.force_step_n);
     double run_slip_sq = 0, run_sd_sq = 0;
     const std::size_t points = std::min(r.slip.size(), r.slip_sd.size());
+    const bool borrows = r.slip_sd_unmeasured && measured > 0 && !r.v_ref_mps.empty();
+    const double borrowed_sd =
+        borrows ? fl.borrowed_speed_noise_mps / std::max(mean_speed_mps(r), 0.1) : 0.0;
+    fl.borrowed_runs += borrows ? 1 : 0;
     for (std::size_t i = 0; i < points; ++i) {
       const double h = 1e-5;  // dF/dslip of the curve at the point
       const double slope = (mf_force_n(m, r.slip[i] + h) - mf_force_n(m, r.slip[i] - h)) / (2 * h);
-      run_slip_sq += slope * slope * r.slip_sd[i] * r.slip_sd[i];
-      run_sd_sq += r.slip_sd[i] * r.slip_sd[i];
+      const double point_sd_sq = r.slip_sd[i] * r.slip_sd[i] + borrowed_sd * borrowed_sd;
+      run_slip_sq += slope * slope * point_sd_sq;
+      run_sd_sq += point_sd_sq;
     }
     if (points == 0) continue;
     slip_sq += run_slip_sq / static_cast<double>(points);
@@ -41,7 +71,16 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
   fl.v_wheel_sd_mps = std::sqrt(fl.v_wheel_sd_mps / n);
   fl.slip_n = std::sqrt(slip_sq / n);
   fl.slip_sd_ratio = std::sqrt(sd_sq / n);
+  if (fl.borrowed_runs == 0) fl.borrowed_speed_noise_mps = 0;
   return fl;
+}
+
+std::string borrowed_noise_note(const Floor& fl) {
+  if (fl.borrowed_runs == 0) return {};
+  return fmt::format(
+      "{} run(s) too short to measure their slip noise on (under 4 smoothing windows) took the "
+      "other runs' speed noise, {:.2g} m/s, at their own speed",
+      fl.borrowed_runs, fl.borrowed_speed_noise_mps);
 }
 
 /// Where: residual of the 4-parameter model by slip region, by phase, by run.

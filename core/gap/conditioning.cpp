@@ -227,6 +227,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   const double slip_sd = measured_sd.value_or(0.0);
   const auto vr = smooth(full.v_ref_mps, o.smooth_half_window),
              vw = smooth(v_wheel, o.smooth_half_window);
+  Run::NoiseProbe probe{o.smooth_half_window, std::move(raw_slip), {}, {}, slip_sd};
   full.v_ref_mps = vr;
   for (std::size_t i = 0; i < vr.size(); ++i) {
     full.slip.push_back(std::clamp(1.0 - vw[i] / vr[i], -1.0, 1.0));  // below 0: a slip offset
@@ -250,6 +251,11 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
         full.wheel_angle_rad[i - 1] + 0.5 * (vw[i] + vw[i - 1]) * dt / c.wheel_radius_m;
     full.ref_angle_rad[i] =
         full.ref_angle_rad[i - 1] + 0.5 * (vr[i] + vr[i - 1]) * dt / ref_radius_m;
+  }
+  if (measured_sd) {
+    probe.wheel_angle_rad = full.wheel_angle_rad;
+    probe.ref_angle_rad = full.ref_angle_rad;
+    full.slip_noise = std::make_shared<const Run::NoiseProbe>(std::move(probe));
   }
   auto dref = derivative(t_clock, vr);
   for (double& d : dref) d = -d;
@@ -288,6 +294,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.ref_ripple_from_speed = full.ref_ripple_from_speed;
   r.ref_ripple_amplitude = full.ref_ripple_amplitude;
   r.slip_sd_unmeasured = full.slip_sd_unmeasured;
+  r.slip_noise = full.slip_noise;
   r.held_level_mps = full.held_level_mps;
   r.held_step_mps = full.held_step_mps;
   r.held_until_s = full.held_until_s;
@@ -304,39 +311,6 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     r.pressure_rate_bar_per_s.push_back(full.pressure_rate_bar_per_s[i]);
   }
   return r;
-}
-
-std::string borrow_slip_noise(std::vector<Run>& runs) {
-  // The slip's noise is measured on the run's own slip (4 wide windows: 130 samples at 1 kHz).
-  // Shorter runs (a 60 bar/s roller stop of generator B's relaxing tyre lasts 50 ms, a ground
-  // run at 500 Hz 0.2 s) were counted noise-free: their floor was the force's alone. The speed
-  // noise (slip noise times speed) is the instruments', the same in every run of a set.
-  double speed_noise = 0;
-  int measured = 0;
-  auto mean_speed = [](const Run& r) {
-    double v = 0;
-    for (double x : r.v_ref_mps) v += x / static_cast<double>(r.v_ref_mps.size());
-    return v;
-  };
-  for (const Run& r : runs)
-    if (!r.slip_sd_unmeasured && !r.slip_sd.empty() && !r.v_ref_mps.empty()) {
-      speed_noise += r.slip_sd.front() * mean_speed(r);
-      ++measured;
-    }
-  if (measured == 0) return {};
-  speed_noise /= measured;
-  int borrowed = 0;
-  for (Run& r : runs)
-    if (r.slip_sd_unmeasured && !r.v_ref_mps.empty()) {
-      r.slip_sd.assign(r.slip.size(), speed_noise / std::max(mean_speed(r), 0.1));
-      r.slip_sd_unmeasured = false;
-      ++borrowed;
-    }
-  if (borrowed == 0) return {};
-  return fmt::format(
-      "{} run(s) too short to measure their slip noise on (under 4 smoothing windows) took the "
-      "other runs' speed noise, {:.2g} m/s, at their own speed",
-      borrowed, speed_noise);
 }
 
 }  // namespace brakefit::gap

@@ -69,7 +69,6 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   if (runs.size() < 2)
     throw InputError("gap diagnosis: fewer than two runs with 20 samples below the force cap");
   Report rep;
-  if (std::string note = borrow_slip_noise(runs); !note.empty()) rep.notes.push_back(note);
   // A constant quantised reference leaves a slip bias common to the runs within half a step: a
   // nuisance term of every fit (the baseline too), not an effect.
   for (const Run& r : runs)
@@ -170,6 +169,7 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         "curve as a function of slip alone: a tyre whose curve is not a Magic Formula can look "
         "like it (checked here: its stiffness ratio is inside its range); roller runs without "
         "deceleration (--roller/--road) separate the two");
+  if (std::string note = borrowed_noise_note(rep.floor); !note.empty()) rep.notes.push_back(note);
   return rep;
 }
 
@@ -211,7 +211,6 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
     dropped += r.t_s.size() - cut.t_s.size();
     if (cut.t_s.size() >= 20) road.push_back(std::move(cut));
   }
-  if (std::string note = borrow_slip_noise(road); !note.empty()) rep.notes.push_back(note);
   if (road.size() < 2)
     throw InputError(
         "bench-vs-bench gap needs at least two road runs (each transfer effect is checked on a "
@@ -234,6 +233,7 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
   };
   rep.before = fit(pointers(road), {});  // the roller's parameters on the road
   rep.floor = noise_floor(road, rep.before.params);
+  if (std::string note = borrowed_noise_note(rep.floor); !note.empty()) rep.notes.push_back(note);
   rep.noise_n = rep.floor.total_n();
   rep.before.stderr_.assign(roller_fit.stderr_.begin(), roller_fit.stderr_.begin() + 4);
   rep.gap_before_rmse_n = heldout(road, {}, fit);

@@ -6,6 +6,7 @@
 // and accepted only past a gain gate and a BIC margin.
 #include <array>
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -97,8 +98,19 @@ struct Run {
   /// Per point: the standard deviation of the smoothed slip that the speed channels' noise
   /// leaves (errors in variables: through the local slope it is force noise the fit cannot remove).
   std::vector<double> slip_sd;
-  /// The run was too short for slip_sd to be measured on it (borrow_slip_noise fills it).
+  /// The run was too short for slip_sd to be measured on it: the floor gives it the measured
+  /// runs' speed noise (noise_floor).
   bool slip_sd_unmeasured = false;
+  /// What the slip's noise was measured on, at full rate (empty: not measured). An encoder's
+  /// ripple taken out of the slip later is taken out of it too and the noise measured again:
+  /// a ground wheel's once-per-revolution ripple (4-10 Hz) lies between the two smoothers'
+  /// bands and was counted as slip noise that the fitted slip no longer has.
+  struct NoiseProbe {
+    int half_window = 0;
+    std::vector<double> raw_slip, wheel_angle_rad, ref_angle_rad;
+    double sd = 0.0;  ///< smoothed_noise_sd of raw_slip
+  };
+  std::shared_ptr<const NoiseProbe> slip_noise;
   /// The slip and its noise as conditioned, before the encoders' ripple was taken out: each
   /// estimate of the ripple starts from them again (remove_encoder_ripple).
   std::vector<double> slip_as_conditioned, slip_sd_as_conditioned;
@@ -218,8 +230,14 @@ struct Floor {
   double slip_sd_ratio = 0.0;                       ///< RMS slip noise (after smoothing)
   double v_ref_sd_mps = 0.0, v_wheel_sd_mps = 0.0;  ///< RMS over runs
   double v_ref_step_mps = 0.0, v_wheel_step_mps = 0.0, force_step_n = 0.0;  ///< largest
+  /// Runs too short to measure their slip noise on, and the measured runs' speed noise they
+  /// took at their own speed (0: none borrowed).
+  int borrowed_runs = 0;
+  double borrowed_speed_noise_mps = 0.0;
 };
 Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params);
+/// The report's note on the runs that borrowed their slip noise (empty: none did).
+std::string borrowed_noise_note(const Floor& fl);
 
 struct Report {
   std::vector<std::string> verdict;

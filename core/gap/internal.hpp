@@ -1,7 +1,9 @@
 #pragma once
 // Helpers shared by the diagnosis's own files (conditioning, effects, fits, selection, cradle cap,
 // the two modes); not part of the public interface in gap.hpp.
+#include <array>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -86,17 +88,25 @@ std::optional<ReferenceRipple> fifth_wheel_ripple(const std::vector<double>& t_s
 /// speed (against the same spline trend); it is taken out of their slip and deceleration. Where
 /// it cannot be placed its slip noise carries it (the floor). Returns a note (empty: none).
 std::string share_fifth_wheel_ripple(std::vector<Run>& runs);
-/// Takes a reference ripple v (1 + c cos + s sin of its angle) out of a run's slip and
-/// deceleration (ripple.cpp).
+/// A once-per-revolution speed ripple: each encoder's speed read as v (1 + c cos + s sin of its
+/// rolled angle), for the wheel [0] and the reference [1] where used.
+struct SpeedRipple {
+  std::array<bool, 2> used{};
+  std::array<double, 2> c{}, s{};
+};
+/// Takes a ripple out of a run's slip, the wheel's acceleration and the reference's deceleration,
+/// and out of what its slip noise was measured on (the noise measured again, its slip_sd's
+/// measured part replaced). Returns that probe without the ripple (null: the run has none); the
+/// run keeps its own probe (ripple_removal.cpp).
+std::shared_ptr<const Run::NoiseProbe> take_out_ripple(Run& r, const SpeedRipple& ripple);
+/// Takes a reference ripple v (1 + c cos + s sin of its angle) out of a run, its probe too: it
+/// is placed once, before the encoders' estimates start from the slip as it leaves here.
 void take_out_reference_ripple(Run& r, double c, double s);
 
 /// The noise a channel keeps after the smoother (half window), measured on the channel: right
 /// for white, anti-correlated and correlated errors alike.
 /// Empty when the series is too short to tell noise from signal (4 wide windows).
 std::optional<double> smoothed_noise_sd(const std::vector<double>& x, int half_window);
-/// A run too short for its slip noise to be measured takes the other runs' speed noise (the same
-/// instruments), at its own speed. Returns a note (empty: none borrowed).
-std::string borrow_slip_noise(std::vector<Run>& runs);
 /// White-noise gain of the smoother (the centre Savitzky-Golay weights: sqrt(sum w^2)).
 double smoothing_noise_gain(int half_window);
 

@@ -35,11 +35,9 @@ constexpr int kPhaseSteps = 72;
 /// and at twice that rate.
 constexpr double kNarrowBand = 2.0;
 
-struct RippleFit {
-  std::array<bool, 2> used{};      ///< wheel, reference
-  std::array<double, 2> c{}, s{};  ///< cos and sin coefficients (relative speed ripple)
-  std::array<double, 2> se{};      ///< standard error of the amplitude
-  double ssr = 0;                  ///< residual sum of squares of the regression
+struct RippleFit : SpeedRipple {
+  std::array<double, 2> se{};  ///< standard error of the amplitude
+  double ssr = 0;              ///< residual sum of squares of the regression
 };
 
 /// The fitted model a ripple is seen through (the baseline, or the model with the named effects).
@@ -189,58 +187,7 @@ std::optional<std::array<double, 2>> scan_phase(RunColumns& columns, const std::
   return std::array<double, 2>{best_c, best_s};
 }
 
-/// d angle / dt at each point (central differences of the rolled angle, one-sided at the ends).
-std::vector<double> angle_rate(const std::vector<double>& t_s, const std::vector<double>& angle) {
-  const std::size_t n = t_s.size();
-  std::vector<double> w(n, 0.0);
-  for (std::size_t i = 0; i < n && n > 1; ++i) {
-    const std::size_t a = i == 0 ? 0 : i - 1, b = i + 1 == n ? n - 1 : i + 1;
-    w[i] = (angle[b] - angle[a]) / std::max(t_s[b] - t_s[a], 1e-9);
-  }
-  return w;
-}
-
-/// Takes a fitted ripple out of a run: a speed read as v (1 + eps(angle)) gives the slip
-/// s - (1 - s) eps_wheel + (1 - s) eps_ref, and its derivative carries v eps' (the wheel's
-/// acceleration, the reference's deceleration).
-void remove_ripple(Run& r, const RippleFit& fit) {
-  const std::size_t n = r.slip.size();
-  for (std::size_t e = 0; e < 2; ++e) {
-    if (!fit.used[e]) continue;
-    const std::vector<double>& angle = e == 0 ? r.wheel_angle_rad : r.ref_angle_rad;
-    const std::vector<double> rate = angle_rate(r.t_s, angle);
-    std::vector<double>& d = e == 0 ? r.wheel_accel_mps2 : r.ref_decel_mps2;
-    const double sign = e == 0 ? 1.0 : -1.0;  // d is +d v_wheel / dt, -d v_ref / dt
-    for (std::size_t i = 0; i < n; ++i) {
-      const double c = std::cos(angle[i]), s = std::sin(angle[i]);
-      const double eps = fit.c[e] * c + fit.s[e] * s;
-      const double eps_rate = (-fit.c[e] * s + fit.s[e] * c) * rate[i];
-      const double v_mps = e == 0 ? r.v_ref_mps[i] * (1 - r.slip[i]) : r.v_ref_mps[i];
-      if (i < d.size()) d[i] = d[i] * (1 - eps) - sign * v_mps * eps_rate;
-    }
-  }
-  // s_measured = s - (1 - s) eps_wheel + (1 - s) eps_ref: the ripple is added back.
-  for (std::size_t i = 0; i < n; ++i) {
-    double fix = 0;
-    for (std::size_t e = 0; e < 2; ++e) {
-      if (!fit.used[e]) continue;
-      const double ang = e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i];
-      const double eps = fit.c[e] * std::cos(ang) + fit.s[e] * std::sin(ang);
-      fix += (e == 0 ? 1.0 : -1.0) * (1 - r.slip[i]) * eps;
-    }
-    r.slip[i] += fix;
-  }
-}
-
 }  // namespace
-
-void take_out_reference_ripple(Run& r, double c, double s) {
-  RippleFit fit;
-  fit.used = {false, true};
-  fit.c[1] = c;
-  fit.s[1] = s;
-  remove_ripple(r, fit);
-}
 
 std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<double>& params,
                                   const std::vector<Effect>& baseline, WhenNoRipple none) {
@@ -381,7 +328,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     r.ref_decel_mps2 = r.ref_decel_as_conditioned;
     if (!fits[k].used[0] && !fits[k].used[1]) continue;
     ++corrected;
-    remove_ripple(r, fits[k]);
+    take_out_ripple(r, fits[k]);
   }
   if (corrected == 0 && uncorrected == 0) {
     // Nothing found this time (an estimate's narrow-band test can fail against a refitted

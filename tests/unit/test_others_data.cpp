@@ -280,15 +280,21 @@ TEST(OthersData, ARunTooShortToMeasureItsSlipNoiseTakesTheOthersSpeedNoise) {
   };
   std::vector<gap::Run> runs{run(1.4, 400, 2e-4), run(1.4, 400, 4e-4), run(0.7, 40, 0.0)};
   runs[2].slip_sd_unmeasured = true;
-  const std::string note = gap::borrow_slip_noise(runs);
+  const std::vector<double> params{10, 1.65, 3000, 0};
+  const gap::Floor fl = gap::noise_floor(runs, params);
+  EXPECT_EQ(fl.borrowed_runs, 1);
+  EXPECT_NEAR(fl.borrowed_speed_noise_mps, 3e-4 * 1.4, 1e-12);  // the measured runs' mean
+  // Each run's RMS slip noise, RMS over runs: the short one at half the speed has twice the slip.
+  const double borrowed_sd = 3e-4 * 1.4 / 0.7;
+  EXPECT_NEAR(fl.slip_sd_ratio, std::sqrt((4e-8 + 16e-8 + borrowed_sd * borrowed_sd) / 3), 1e-12);
+  const std::string note = gap::borrowed_noise_note(fl);
   EXPECT_NE(note.find("1 run(s) too short"), std::string::npos) << note;
-  ASSERT_EQ(runs[2].slip_sd.size(), 40u);
-  EXPECT_NEAR(runs[2].slip_sd.front(), 3e-4 * 1.4 / 0.7, 1e-9);  // the mean, at half the speed
-  EXPECT_FALSE(runs[2].slip_sd_unmeasured);
-  EXPECT_DOUBLE_EQ(runs[0].slip_sd.front(), 2e-4);  // measured runs keep their own
+  EXPECT_DOUBLE_EQ(runs[0].slip_sd.front(), 2e-4);  // the runs are not changed
   // Measured as zero (a noise-free export) is not unmeasured: nothing is borrowed.
   std::vector<gap::Run> exact{run(1.4, 400, 0.0), run(1.4, 400, 0.0)};
-  EXPECT_TRUE(gap::borrow_slip_noise(exact).empty());
+  const gap::Floor none = gap::noise_floor(exact, params);
+  EXPECT_EQ(none.borrowed_runs, 0);
+  EXPECT_TRUE(gap::borrowed_noise_note(none).empty());
   // The conditioning says which runs it could not measure: the first 100 ms of a stop.
   const auto csv = pipeline::parse_event_csv(roller_export(0.003), "e.csv");
   const auto ev = detect(csv, true);

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <random>
 
 #include "core/gap/internal.hpp"
 #include "sim/referee.hpp"
@@ -85,4 +87,47 @@ TEST(ReferenceRipple, LoadTransferOnRunsWithARipplingFifthWheelIsNamed) {
     EXPECT_NEAR(t.estimate, t.truth.magnitude, (seed == 1 ? 0.1 : 0.2) * t.truth.magnitude)
         << "seed " << seed;
   }
+}
+
+TEST(ReferenceRipple, TheSlipNoiseIsMeasuredAgainWithTheRippleOut) {
+  // A fifth wheel at 50 km/h (0.2 m: 11 Hz) with a ripple of 3e-4, and white slip noise of 2e-4
+  // at 500 Hz. The ripple passes the narrow smoother and not all of the wide one: measured on the
+  // slip as conditioned, it is counted as noise. Once it is taken out of the slip, it is taken out
+  // of what the noise was measured on too, and the noise is that of the slip the fit sees.
+  constexpr int kHalfWindow = 10;
+  constexpr double kSlip = 0.05, kSpeedMps = 13.9, kAmp = 3e-4, kPhase = 0.7;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 2e-4);
+  gap::Run r;
+  std::vector<double> noise_only;
+  for (int i = 0; i < 750; ++i) {
+    const double t = i * 2e-3, ref_angle = kSpeedMps * t / 0.2;
+    const double n = noise(rng);
+    noise_only.push_back(kSlip + n);
+    r.t_s.push_back(t);
+    r.v_ref_mps.push_back(kSpeedMps);
+    r.ref_angle_rad.push_back(ref_angle);
+    r.wheel_angle_rad.push_back(kSpeedMps * (1 - kSlip) * t / 0.3);
+    // Measured slip: s + (1 - s) eps_ref.
+    r.slip.push_back(kSlip + n + (1 - kSlip) * kAmp * std::cos(ref_angle - kPhase));
+    r.wheel_accel_mps2.push_back(0.0);
+    r.ref_decel_mps2.push_back(0.0);
+  }
+  const double with_ripple = gap::smoothed_noise_sd(r.slip, kHalfWindow).value();
+  const double without = gap::smoothed_noise_sd(noise_only, kHalfWindow).value();
+  ASSERT_GT(with_ripple, 1.5 * without);  // the ripple inflates the measured noise
+  r.slip_sd.assign(r.slip.size(), with_ripple);
+  r.slip_noise = std::make_shared<const gap::Run::NoiseProbe>(
+      gap::Run::NoiseProbe{kHalfWindow, r.slip, r.wheel_angle_rad, r.ref_angle_rad, with_ripple});
+  gap::take_out_reference_ripple(r, kAmp * std::cos(kPhase), kAmp * std::sin(kPhase));
+  EXPECT_NEAR(r.slip_sd.front(), without, 0.02 * without);
+  EXPECT_NEAR(r.slip_sd.back(), without, 0.02 * without);
+  ASSERT_TRUE(r.slip_noise);
+  EXPECT_NEAR(r.slip_noise->sd, without, 0.02 * without);  // later estimates start from it
+  // A run whose noise was not measured (no probe) keeps what it has.
+  gap::Run bare = r;
+  bare.slip_noise.reset();
+  bare.slip_sd.assign(bare.slip.size(), 1e-3);
+  gap::take_out_reference_ripple(bare, kAmp, 0.0);
+  EXPECT_DOUBLE_EQ(bare.slip_sd.front(), 1e-3);
 }
