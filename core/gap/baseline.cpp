@@ -33,12 +33,13 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
   // run of a set) at their own speed, as the measured runs have it now (with the encoders'
   // ripple out, when it was taken out since).
   int measured = 0;
+  double speed_noise_mps = 0;
   for (const Run& r : runs)
     if (!r.slip_sd_unmeasured && !r.slip_sd.empty() && !r.v_ref_mps.empty()) {
-      fl.borrowed_speed_noise_mps += r.slip_sd.front() * mean_speed_mps(r);
+      speed_noise_mps += r.slip_sd.front() * mean_speed_mps(r);
       ++measured;
     }
-  if (measured > 0) fl.borrowed_speed_noise_mps /= measured;
+  if (measured > 0) speed_noise_mps /= measured;
   // RMS over runs of each run's mean square, as the held-out gap weighs its runs.
   double force_sq = 0, slip_sq = 0, sd_sq = 0;
   for (const Run& r : runs) {
@@ -51,9 +52,11 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
     double run_slip_sq = 0, run_sd_sq = 0;
     const std::size_t points = std::min(r.slip.size(), r.slip_sd.size());
     const bool borrows = r.slip_sd_unmeasured && measured > 0 && !r.v_ref_mps.empty();
-    const double borrowed_sd =
-        borrows ? fl.borrowed_speed_noise_mps / std::max(mean_speed_mps(r), 0.1) : 0.0;
-    fl.borrowed_runs += borrows ? 1 : 0;
+    const double borrowed_sd = borrows ? speed_noise_mps / std::max(mean_speed_mps(r), 0.1) : 0.0;
+    if (borrows) {
+      ++fl.borrowed_runs;
+      fl.borrowed_speed_noise_mps = speed_noise_mps;
+    }
     for (std::size_t i = 0; i < points; ++i) {
       const double h = 1e-5;  // dF/dslip of the curve at the point
       const double slope = (mf_force_n(m, r.slip[i] + h) - mf_force_n(m, r.slip[i] - h)) / (2 * h);
@@ -71,7 +74,6 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
   fl.v_wheel_sd_mps = std::sqrt(fl.v_wheel_sd_mps / n);
   fl.slip_n = std::sqrt(slip_sq / n);
   fl.slip_sd_ratio = std::sqrt(sd_sq / n);
-  if (fl.borrowed_runs == 0) fl.borrowed_speed_noise_mps = 0;
   return fl;
 }
 

@@ -242,10 +242,10 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   // over jittered stamps a 250 bar/s ramp read each stamp's error as force (ramp rate x the
   // jitter since the filter's memory: 5 N at 0.3 ms on B's null ground sets, which then said
   // `unexplained` at 2x the floor).
-  std::vector<double> t_clock = smooth(full.t_s, o.smooth_half_window);
-  for (std::size_t i = 1; i < t_clock.size(); ++i)
-    t_clock[i] = std::max(t_clock[i], t_clock[i - 1]);
-  full.t_s = t_clock;
+  full.t_s = smooth(full.t_s, o.smooth_half_window);
+  for (std::size_t i = 1; i < full.t_s.size(); ++i)
+    full.t_s[i] = std::max(full.t_s[i], full.t_s[i - 1]);
+  const std::vector<double>& t_clock = full.t_s;
   full.wheel_accel_mps2 = derivative(t_clock, vw);
   // The encoders' angles (trapezoidal integration of speed / radius).
   const double ref_radius_m =

@@ -3,7 +3,6 @@
 // the two modes); not part of the public interface in gap.hpp.
 #include <array>
 #include <functional>
-#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -96,9 +95,11 @@ struct SpeedRipple {
 };
 /// Takes a ripple out of a run's slip, the wheel's acceleration and the reference's deceleration,
 /// and out of what its slip noise was measured on (the noise measured again, its slip_sd's
-/// measured part replaced). Returns that probe without the ripple (null: the run has none); the
-/// run keeps its own probe (ripple_removal.cpp).
-std::shared_ptr<const Run::NoiseProbe> take_out_ripple(Run& r, const SpeedRipple& ripple);
+/// measured part replaced). The run's probe stays as it was (AsMeasured: an estimate that starts
+/// from the slip as conditioned again) or becomes the probe without the ripple (WithoutRipple:
+/// a ripple placed once) (ripple_removal.cpp).
+enum class ProbeAfter { AsMeasured, WithoutRipple };
+void take_out_ripple(Run& r, const SpeedRipple& ripple, ProbeAfter probe_after);
 /// Takes a reference ripple v (1 + c cos + s sin of its angle) out of a run, its probe too: it
 /// is placed once, before the encoders' estimates start from the slip as it leaves here.
 void take_out_reference_ripple(Run& r, double c, double s);

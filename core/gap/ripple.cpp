@@ -328,7 +328,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     r.ref_decel_mps2 = r.ref_decel_as_conditioned;
     if (!fits[k].used[0] && !fits[k].used[1]) continue;
     ++corrected;
-    take_out_ripple(r, fits[k]);
+    take_out_ripple(r, fits[k], ProbeAfter::AsMeasured);
   }
   if (corrected == 0 && uncorrected == 0) {
     // Nothing found this time (an estimate's narrow-band test can fail against a refitted

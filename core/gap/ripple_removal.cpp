@@ -36,14 +36,11 @@ double ripple_fix(const SpeedRipple& fit, double slip, double wheel_angle_rad,
   return fix;
 }
 
-/// The slip's noise probe with the ripple taken out of its raw slip, and the noise measured on
-/// that again.
-std::shared_ptr<const Run::NoiseProbe> probe_without(const Run::NoiseProbe& p,
-                                                     const SpeedRipple& fit) {
-  auto out = std::make_shared<Run::NoiseProbe>(p);
-  for (std::size_t i = 0; i < out->raw_slip.size(); ++i)
-    out->raw_slip[i] += ripple_fix(fit, p.raw_slip[i], p.wheel_angle_rad[i], p.ref_angle_rad[i]);
-  out->sd = smoothed_noise_sd(out->raw_slip, p.half_window).value_or(p.sd);
+/// The probe's raw slip with the ripple taken out of it.
+std::vector<double> raw_slip_without(const Run::NoiseProbe& p, const SpeedRipple& fit) {
+  std::vector<double> out = p.raw_slip;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out[i] += ripple_fix(fit, p.raw_slip[i], p.wheel_angle_rad[i], p.ref_angle_rad[i]);
   return out;
 }
 
@@ -71,22 +68,24 @@ void remove_ripple(Run& r, const SpeedRipple& fit) {
     r.slip[i] += ripple_fix(fit, r.slip[i], r.wheel_angle_rad[i], r.ref_angle_rad[i]);
 }
 
-/// The slip's noise was measured with the ripple in it: its measured part is replaced by the
-/// noise measured without it. Returns the probe without the ripple (null: the run has none).
-std::shared_ptr<const Run::NoiseProbe> remeasure_slip_noise(Run& r, const SpeedRipple& fit) {
-  if (!r.slip_noise) return nullptr;
-  auto probe = probe_without(*r.slip_noise, fit);
-  const double before = r.slip_noise->sd, after = probe->sd;
-  for (double& sd : r.slip_sd)
-    sd = std::sqrt(std::max(sd * sd - before * before + after * after, 0.0));
-  return probe;
-}
-
 }  // namespace
 
-std::shared_ptr<const Run::NoiseProbe> take_out_ripple(Run& r, const SpeedRipple& ripple) {
+void take_out_ripple(Run& r, const SpeedRipple& ripple, ProbeAfter probe_after) {
   remove_ripple(r, ripple);
-  return remeasure_slip_noise(r, ripple);
+  if (!r.slip_noise) return;
+  // The slip's noise was measured with the ripple in it: its measured part is replaced by the
+  // noise measured without it.
+  std::vector<double> raw = raw_slip_without(*r.slip_noise, ripple);
+  const double before = r.slip_noise->sd;
+  const double after = smoothed_noise_sd(raw, r.slip_noise->half_window).value_or(before);
+  for (double& sd : r.slip_sd)
+    sd = std::sqrt(std::max(sd * sd - before * before + after * after, 0.0));
+  if (probe_after == ProbeAfter::WithoutRipple) {
+    auto probe = std::make_shared<Run::NoiseProbe>(*r.slip_noise);
+    probe->raw_slip = std::move(raw);
+    probe->sd = after;
+    r.slip_noise = std::move(probe);
+  }
 }
 
 void take_out_reference_ripple(Run& r, double c, double s) {
@@ -96,7 +95,7 @@ void take_out_reference_ripple(Run& r, double c, double s) {
   fit.s[1] = s;
   // Placed once, before the encoders' estimates start from the slip as it leaves here: the
   // probe keeps it out too.
-  if (auto probe = take_out_ripple(r, fit)) r.slip_noise = std::move(probe);
+  take_out_ripple(r, fit, ProbeAfter::WithoutRipple);
 }
 
 }  // namespace brakefit::gap
