@@ -44,6 +44,11 @@ std::vector<Effect> without_tyre_shift(const std::vector<Effect>& model,
 
 /// Zero-phase Savitzky-Golay smoothing (quadratic, centred; the window shrinks at the ends).
 std::vector<double> smooth(const std::vector<double>& x, int half_window);
+/// The sampler's clock under the stamps: a tester samples on a regular clock and stamps each
+/// sample early or late (jitter, a 1 ms stamp resolution). Where the stamps scatter about one line
+/// of the sample index (no drift wider than a quarter interval), that line; otherwise (uneven
+/// sampling, a dropped sample) the stamps smoothed as the channels are, made monotone.
+std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_window);
 /// Central differences (one-sided at the ends).
 std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x);
 /// Linear interpolation of x(t) at `at`, held at the ends.

@@ -74,6 +74,45 @@ std::vector<double> smooth(const std::vector<double>& x, int hw) {
   return y;
 }
 
+std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_window) {
+  const std::size_t n = stamps_s.size();
+  auto smoothed = [&] {
+    std::vector<double> t = smooth(stamps_s, half_window);
+    for (std::size_t i = 1; i < n; ++i) t[i] = std::max(t[i], t[i - 1]);
+    return t;
+  };
+  if (n < 8) return smoothed();
+  // Least squares line of the stamps over the sample index.
+  const double mean_k = 0.5 * static_cast<double>(n - 1);
+  double mean_t = 0;
+  for (double t : stamps_s) mean_t += t / static_cast<double>(n);
+  double skt = 0, skk = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double dk = static_cast<double>(k) - mean_k;
+    skt += dk * (stamps_s[k] - mean_t);
+    skk += dk * dk;
+  }
+  const double interval_s = skt / skk;
+  if (!(interval_s > 0)) return smoothed();
+  std::vector<double> line(n), residual(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    line[k] = mean_t + interval_s * (static_cast<double>(k) - mean_k);
+    residual[k] = stamps_s[k] - line[k];
+  }
+  // Regular: the residual is the stamps' scatter, with no trend (a drifting or uneven sampler, a
+  // dropped sample's step of one interval): its mean over each block of six smoothers' half
+  // windows stays within a quarter interval (the scatter's own, 0.4 ms over 60 samples: 0.05 ms).
+  const std::size_t block = std::max<std::size_t>(8, 6 * static_cast<std::size_t>(half_window));
+  for (std::size_t b0 = 0; b0 < n; b0 += block) {
+    const std::size_t b1 = n - b0 < 2 * block ? n : b0 + block;  // the remainder joins the last
+    double mean = 0;
+    for (std::size_t k = b0; k < b1; ++k) mean += residual[k] / static_cast<double>(b1 - b0);
+    if (std::abs(mean) > 0.25 * interval_s) return smoothed();
+    if (b1 == n) break;
+  }
+  return line;
+}
+
 std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x) {
   std::vector<double> d(x.size(), 0.0);
   for (std::size_t i = 0; i < x.size(); ++i) {

@@ -11,8 +11,10 @@
 #include "core/pipeline/event_csv.hpp"
 #include "core/pipeline/pipeline.hpp"
 #include "core/rng.hpp"
+#include "tests/unit/event_test_util.hpp"
 
 using namespace brakefit;
+using brakefit::test::detect;
 
 namespace {
 
@@ -46,17 +48,6 @@ std::string roller_export(double step_mps, double last_slip = 0.266, double ref_
     if (slip >= last_slip) break;
   }
   return csv;
-}
-
-std::vector<pipeline::Event> detect(const pipeline::EventCsv& csv, bool as_file) {
-  pipeline::PipelineOptions o;
-  o.fit = false;
-  pipeline::Pipeline p(csv.calibration, o, nullptr);
-  for (const auto& s : csv.samples) p.feed(s);
-  as_file ? p.finish_file() : p.finish();
-  std::vector<pipeline::Event> out;
-  for (auto& e : p.events()) out.push_back(e.event);
-  return out;
 }
 
 }  // namespace
@@ -325,87 +316,4 @@ TEST(OthersData, TheModelForceIsFilteredAsTheDeclaredChannelWas) {
   for (double x : t) g.push_back(k * (x + 0.01));
   gap::filter_first_order(t, g, tau_s, k * 0.01);
   EXPECT_NEAR(g.back(), k * (t.back() + 0.01 - tau_s), 1e-3 * k);
-}
-
-TEST(OthersData, ADerivativeTakesItsTimeFromTheSamplersClockNotEachJitteredStamp) {
-  // A ground stop exported at 1 kHz with its stamps jittered (0.25 ms) and quantised to 1 ms:
-  // two samples that fall on one stamp are spread half a step apart when read, and a central
-  // difference across such a pair read the fifth wheel's 8 m/s^2 as up to twice that (generator
-  // B: 24.6 for 12.3, which load transfer read as load). The derivatives take their time from
-  // the stamps smoothed as the channels are.
-  std::string csv =
-      "# bench=ground\n# wheel_radius_m=0.3\n# brake_gain_n_per_bar=100\n"
-      "t_s,v_ref_mps,v_wheel_mps,pressure_bar\n";
-  Rng rng(7);
-  double last_stamp = -1;
-  for (int i = 0; i < 1200; ++i) {
-    const double t = i * 1e-3;
-    const double p = std::max(0.0, 100.0 * (t - 0.1));  // 100 bar/s from 0.1 s
-    const double decel = t < 0.2 ? 0.0 : 8.0;           // the vehicle slows from 0.2 s on
-    const double v = 20.0 - decel * (t - 0.2);
-    const double slip = 1e-4 * p;
-    double stamp = std::round((t + 2.5e-4 * rng.normal()) * 1e3) / 1e3;
-    stamp = std::max(stamp, last_stamp);  // a stamp never goes back: it repeats
-    last_stamp = stamp;
-    csv += fmt::format("{:.3f},{:.6f},{:.6f},{:.3f}\n", stamp, v, v * (1 - slip), p);
-  }
-  const auto parsed = pipeline::parse_event_csv(csv, "g.csv");
-  ASSERT_GT(parsed.repeated_stamps, 10u);  // the export has stamps that repeat
-  const auto ev = detect(parsed, true);
-  ASSERT_EQ(ev.size(), 1u);
-  const gap::Run r = gap::condition("g", ev.front(), parsed.calibration, {});
-  double worst = 0;
-  std::size_t points = 0;
-  for (std::size_t i = 0; i < r.t_s.size(); ++i)
-    if (r.t_s[i] > 0.25 && r.t_s[i] < 1.1) {  // past the smoother's reach of the kink and end
-      worst = std::max(worst, std::abs(r.ref_decel_mps2[i] - 8.0));
-      ++points;
-    }
-  ASSERT_GT(points, 100u);
-  // Measured: 0.82 m/s^2 at worst (one point; the rest within 0.3), 7.98 off each stamp.
-  EXPECT_LT(worst, 1.0) << "the deceleration read off the jittered stamps";
-}
-
-TEST(OthersData, TheRunsTimeIsTheSamplersClock) {
-  // A ground stop exported at 500 Hz, its stamps jittered (0.3 ms) and quantised to 1 ms. The
-  // model's force passes through a declared pressure filter over the run's time: over each
-  // stamp, a 250 bar/s ramp read the stamp's error as force (ramp rate x the jitter since the
-  // filter's memory: 5 N on generator B's null ground sets, which said `unexplained` at 2x their
-  // floor). The run's time is the sampler's clock (the stamps smoothed as the channels are).
-  // The vehicle slows at 8 m/s^2 from 0.2 s, so its speed tells each point's true time.
-  std::string csv =
-      "# bench=ground\n# wheel_radius_m=0.3\n# brake_gain_n_per_bar=100\n"
-      "# pressure_filter_s=0.01\nt_s,v_ref_mps,v_wheel_mps,pressure_bar\n";
-  Rng rng(11);
-  double last_stamp = -1, stamp_sq = 0;
-  for (int i = 0; i < 600; ++i) {
-    const double t = i * 2e-3;
-    const double p = std::max(0.0, 200.0 * (t - 0.1));
-    const double v = 20.0 - (t < 0.2 ? 0.0 : 8.0 * (t - 0.2));
-    double stamp = std::round((t + 3e-4 * rng.normal()) * 1e3) / 1e3;
-    stamp = std::max(stamp, last_stamp);
-    last_stamp = stamp;
-    stamp_sq += (stamp - t) * (stamp - t);
-    csv += fmt::format("{:.3f},{:.6f},{:.6f},{:.4f}\n", stamp, v, v * (1 - 1e-4 * p), p);
-  }
-  const double stamp_rms_s = std::sqrt(stamp_sq / 600);
-  const auto parsed = pipeline::parse_event_csv(csv, "g.csv");
-  const auto ev = detect(parsed, true);
-  ASSERT_EQ(ev.size(), 1u);
-  const gap::Run r = gap::condition("g", ev.front(), parsed.calibration, {});
-  // Each point's time against its true time (from the speed), up to one offset for the run.
-  std::vector<double> err_s;
-  for (std::size_t i = 0; i < r.t_s.size(); ++i) {
-    ASSERT_TRUE(i == 0 || r.t_s[i] >= r.t_s[i - 1]);
-    const double t_true = 0.2 + (20.0 - r.v_ref_mps[i]) / 8.0;
-    if (t_true > 0.25 && t_true < 1.1) err_s.push_back(r.t_s[i] - t_true);
-  }
-  ASSERT_GT(err_s.size(), 100u);
-  double mean = 0, sq = 0;
-  for (double e : err_s) mean += e / static_cast<double>(err_s.size());
-  for (double e : err_s) sq += (e - mean) * (e - mean);
-  const double rms_s = std::sqrt(sq / static_cast<double>(err_s.size()));
-  // Measured: 0.16 ms (0.32 ms when the run kept the stamps), the stamps 0.31 ms.
-  EXPECT_LT(rms_s, 0.6 * stamp_rms_s)
-      << "the run's time " << rms_s << " s off, the stamps " << stamp_rms_s;
 }
