@@ -71,7 +71,12 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
 std::vector<double> held_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
                                       double roller_radius_m);
 /// A fifth wheel's ripple is read from its own speed on runs spanning this many revolutions.
-constexpr double kReferenceRippleRevolutions = 1.5;
+/// Over fewer the trend's misfit (a spline knotted every 0.75 revolutions) projects onto the
+/// ripple's columns as much as onto its neighbours': generator B's 30 km/h ground runs (1.5-2.5
+/// revolutions) found 10 amplitudes 2-12x their encoder's of 115 (4e-4 for 3.5e-5, load
+/// transfer seed 101097), and no test of the fit told them apart. Shorter runs place the
+/// others' amplitude (share_fifth_wheel_ripple).
+constexpr double kReferenceRippleRevolutions = 2.5;
 /// A fifth wheel's once-per-revolution ripple read from its own speed (reference_ripple.cpp).
 struct ReferenceRipple {
   bool found = false;
@@ -79,10 +84,10 @@ struct ReferenceRipple {
   double revolutions = 0.0;   ///< the fifth wheel's revolutions over the run
   std::vector<double> v_mps;  ///< the speed with the ripple divided out (when found)
 };
-/// Fits the speed as a smooth trend (a cubic spline in the rolled angle, knots 1.5 revolutions
+/// Fits the speed as a smooth trend (a cubic spline in the rolled angle, knots 0.75 revolutions
 /// apart) times 1 + a once-per-revolution ripple; the ripple is found when significant (3
-/// standard errors) and narrow-band (4x what the same fit explains at half or twice the rate).
-/// Nothing when the run spans fewer than kReferenceRippleRevolutions.
+/// standard errors) and narrow-band (more than the same fit explains at half or twice the
+/// rate). Nothing when the run spans fewer than kReferenceRippleRevolutions.
 std::optional<ReferenceRipple> fifth_wheel_ripple(const std::vector<double>& t_s,
                                                   const std::vector<double>& v_mps,
                                                   double radius_m);

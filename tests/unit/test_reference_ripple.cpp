@@ -60,7 +60,7 @@ TEST(ReferenceRipple, NoRippleIsFoundInASmoothOrShortStop) {
     // spline's misfit at the kink, under a tenth of the ripples generator B draws.
     EXPECT_TRUE(!r->found || r->amplitude < 5e-5) << v0 << ": amplitude " << r->amplitude;
   }
-  // Under 1.5 revolutions the speed cannot tell a ripple from its trend: not looked for.
+  // Under 2.5 revolutions the speed cannot tell a ripple from its trend: not looked for.
   const Stop s = stop(8.3, 0.2, 4e-4, 0.0);
   EXPECT_FALSE(gap::fifth_wheel_ripple(s.t_s, s.v_read, 0.2).has_value());
 }
@@ -73,17 +73,25 @@ TEST(ReferenceRipple, LoadTransferOnRunsWithARipplingFifthWheelIsNamed) {
   // own speed it is named (its magnitude measured at the published stiffness ratio: 0.041 for
   // 0.0445). Seed 2 (load up 70 %) took its stiffness ratio to the end of its range while the
   // wheel's ripple was read through the baseline; scored against its own ripple it is named,
-  // 0.044 for 0.054 (a gap is left: `unexplained` follows). Seed 3 is still missed (slip_offset
-  // first). The fifth wheel's ripple is read from its speed in every one of them.
+  // 0.044 for 0.054 (a gap is left: `unexplained` follows). Seed 3 said slip_offset first until
+  // the run's time was the sampler's line (its stamps' scatter bent the deceleration). The fifth
+  // wheel's ripple is read from its speed in every one of them, and its 30 km/h run (under 2.5
+  // revolutions) places the others' amplitude: tested against what a ripple can explain beyond
+  // the spline's trend there, not its whole variance, which left it in that run's slip noise
+  // and seed 1 said `none` at a floor of 22 N.
   for (std::uint64_t seed : {1u, 2u, 3u}) {
     const sim::Injection inj{"load_transfer", 0.04, gap::Condition::Ground, sim::Generator::B};
     const auto t = sim::run_trial(inj, seed, gap::calibrated_options(gap::Condition::Ground));
     ASSERT_FALSE(t.verdict.empty());
-    bool read = false;
-    for (const auto& n : t.notes) read |= n.find("read from its own speed") != std::string::npos;
+    bool read = false, placed = false;
+    for (const auto& n : t.notes) {
+      read |= n.find("read from its own speed") != std::string::npos;
+      placed |= n.find("1 of 1 shorter runs took that amplitude") != std::string::npos;
+    }
     EXPECT_TRUE(read) << "seed " << seed;
-    if (seed == 3) continue;
+    EXPECT_TRUE(placed) << "seed " << seed;
     EXPECT_EQ(t.verdict.front(), "load_transfer") << "seed " << seed;
+    // Measured: 0.0408 for 0.0445, 0.0443 for 0.0535, 0.0415 for 0.0396.
     EXPECT_NEAR(t.estimate, t.truth.magnitude, (seed == 1 ? 0.1 : 0.2) * t.truth.magnitude)
         << "seed " << seed;
   }
