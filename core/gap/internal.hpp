@@ -72,10 +72,10 @@ std::vector<double> held_roller_speed(const std::vector<double>& t_s, const std:
                                       double roller_radius_m);
 /// A fifth wheel's ripple is read from its own speed on runs spanning this many revolutions.
 /// Over fewer the trend's misfit (a spline knotted every 0.75 revolutions) projects onto the
-/// ripple's columns as much as onto its neighbours': generator B's 30 km/h ground runs (1.5-2.5
-/// revolutions) found 10 amplitudes 2-12x their encoder's of 115 (4e-4 for 3.5e-5, load
-/// transfer seed 101097), and no test of the fit told them apart. Shorter runs place the
-/// others' amplitude (share_fifth_wheel_ripple).
+/// ripple's columns as much as onto its neighbours': 10 of generator B's 140 ground runs of
+/// 1.5-2.5 revolutions read amplitudes 1.7-11x their encoder's (4e-4 for 3.5e-5, load transfer
+/// seed 101097), and no test of the fit told them apart. Shorter runs place the others'
+/// amplitude (share_fifth_wheel_ripple).
 constexpr double kReferenceRippleRevolutions = 2.5;
 /// A fifth wheel's once-per-revolution ripple read from its own speed (reference_ripple.cpp).
 struct ReferenceRipple {
