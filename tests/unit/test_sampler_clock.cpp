@@ -44,8 +44,8 @@ TEST(SamplerClock, ARegularSamplersJitteredStampsAreReadAsItsLine) {
   // the channels are, the stamps kept a scatter whose differences over two samples read a
   // fifth wheel's deceleration 2 % off mid-run and twice over at the run's end (the smoother's
   // window shrinks there): load transfer seed 101171 was lost (the ratio at 0).
-  std::vector<double> times;
-  for (int i = 0; i < 600; ++i) times.push_back(0.013 + i * 2e-3);
+  std::vector<double> times(600);
+  for (std::size_t i = 0; i < times.size(); ++i) times[i] = 0.013 + static_cast<double>(i) * 2e-3;
   const auto stamps = stamps_of(times, 4e-4, 1e-4, 3);
   const auto clock = gap::sampler_clock(stamps, 10);
   ASSERT_EQ(clock.size(), times.size());
