@@ -243,8 +243,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   // samples that share a stamp are spread half a step apart, and a central difference over
   // such a pair read a fifth wheel's 12.3 m/s^2 as 24.6 (generator B, load transfer seed
   // 101048), which load transfer then read as load.
-  const std::vector<double>& t_clock = full.t_s;
-  full.wheel_accel_mps2 = derivative(t_clock, vw);
+  full.wheel_accel_mps2 = derivative(full.t_s, vw);
   // The encoders' angles (trapezoidal integration of speed / radius).
   const double ref_radius_m =
       c.bench == can::BenchKind::Roller ? c.roller_radius_m : c.fifth_wheel_radius_m;
@@ -262,10 +261,10 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     probe.ref_angle_rad = full.ref_angle_rad;
     full.slip_noise = std::make_shared<const Run::NoiseProbe>(std::move(probe));
   }
-  auto dref = derivative(t_clock, vr);
+  auto dref = derivative(full.t_s, vr);
   for (double& d : dref) d = -d;
   full.ref_decel_mps2 = dref;
-  full.pressure_rate_bar_per_s = derivative(t_clock, smooth(pressure, o.smooth_half_window));
+  full.pressure_rate_bar_per_s = derivative(full.t_s, smooth(pressure, o.smooth_half_window));
   // Start state: the slip rate (a line through the first kInitialWindowS) and the force at the
   // first sample (a line through the first 20 ms: a 250 bar/s ramp adds 170 N in 10 ms, so a mean
   // would sit half of that too high).

@@ -155,6 +155,7 @@ std::string share_fifth_wheel_ripple(std::vector<Run>& runs) {
         best_s = s;
       }
     }
+    if (best_c == 0 && best_s == 0) continue;  // no phase explains anything
     // Kept when it explains at least half of what a ripple of that amplitude and phase can
     // over the run, not just a sliver of a trend's misfit. What it can: its own variance beyond
     // the trend (over two revolutions the spline takes a third of a ripple's; against its whole
@@ -165,7 +166,6 @@ std::string share_fifth_wheel_ripple(std::vector<Run>& runs) {
           r.v_ref_mps[i] *
           (best_c * std::cos(r.ref_angle_rad[i]) + best_s * std::sin(r.ref_angle_rad[i]));
     const double ripple_sq = (ripple - a * qr.solve(ripple)).squaredNorm();
-    if (best_c == 0 && best_s == 0) continue;
     if (none - best < 0.5 * ripple_sq) continue;
     r.v_ref_mps = without_ripple(r.v_ref_mps, r.ref_angle_rad, best_c, best_s);
     take_out_reference_ripple(r, best_c, best_s);
