@@ -87,7 +87,8 @@ void leave_out_if_empty(std::vector<LeftOut>& out, const Run& run) {
 }
 
 std::string flagged_reason(const pipeline::Event& e) {
-  return fmt::format("flagged {} (ended by {})", fmt::join(e.flags, ", "), e.end_reason);
+  return fmt::format("flagged {} (ended by {}{})", fmt::join(e.flags, ", "), e.end_reason,
+                     e.note.empty() ? "" : ": " + e.note);
 }
 
 nlohmann::ordered_json left_out_json(const std::vector<LeftOut>& left_out) {

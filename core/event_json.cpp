@@ -80,6 +80,7 @@ nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::str
   j["t_end_ns"] = e.event.t_end_ns;
   j["end_reason"] = e.event.end_reason;
   j["flags"] = e.event.flags;
+  if (!e.event.note.empty()) j["end_note"] = e.event.note;
   j["points"] = e.curve.size();
   j["max_slip_ratio"] = num(e.curve.max_slip_ratio());
   double max_force_n = std::nan("");

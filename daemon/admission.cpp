@@ -1,11 +1,16 @@
 #include "daemon/admission.hpp"
 
+#include <algorithm>
 #include <map>
 
 namespace brakefit::daemon {
 
 Admission admit_connection(const std::vector<ConnectionView>& open, const std::string& ip,
-                           int max_clients, int max_per_address) {
+                           int max_clients, int max_per_address,
+                           const std::vector<std::string>& protected_ips) {
+  auto is_protected = [&](const std::string& a) {
+    return std::find(protected_ips.begin(), protected_ips.end(), a) != protected_ips.end();
+  };
   std::map<std::string, int> per_address;
   for (const auto& c : open) ++per_address[c.ip];
   Admission a;
@@ -19,14 +24,14 @@ Admission admit_connection(const std::vector<ConnectionView>& open, const std::s
   // own, which holds fewer than the limit and is not preferred over a heavier holder).
   int most = 0;
   for (const auto& [addr, n] : per_address)
-    if (addr != ip) most = std::max(most, n);
-  if (most == 0) {  // only the newcomer's own connections are open: max_per_address >= max_clients
+    if (addr != ip && !is_protected(addr)) most = std::max(most, n);
+  if (most == 0) {  // only the newcomer's own or protected connections are open
     a.admit = false;
-    a.reason = "max_clients";
+    a.reason = "max_clients (the open connections are the newcomer's own or protected)";
     return a;
   }
   for (std::size_t i = 0; i < open.size(); ++i) {
-    if (open[i].ip == ip || per_address[open[i].ip] != most) continue;
+    if (open[i].ip == ip || is_protected(open[i].ip) || per_address[open[i].ip] != most) continue;
     if (!a.evict || open[i].last_byte < open[*a.evict].last_byte) a.evict = i;
   }
   a.reason = "max_clients: the idlest connection of the busiest address makes room";

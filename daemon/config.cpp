@@ -122,7 +122,9 @@ void parse_pipeline(const TomlReader& rd, const toml::table& t, Config& c) {
   const std::string p = "pipeline.";
   rd.check_keys(t, p,
                 {"methods", "force", "start_pressure_bar", "release_pressure_bar",
-                 "lock_slip_ratio", "min_ref_speed_mps", "min_points", "min_duration_s"});
+                 "lock_slip_ratio", "min_ref_speed_mps", "min_points", "min_duration_s",
+                 "max_event_s", "max_speed_mps", "min_speed_mps", "max_pressure_bar",
+                 "min_pressure_bar"});
   auto& o = c.pipeline;
   if (t.get("methods")) {
     o.methods.clear();
@@ -146,13 +148,22 @@ void parse_pipeline(const TomlReader& rd, const toml::table& t, Config& c) {
   e.min_ref_speed_mps = rd.number(t, p, "min_ref_speed_mps", e.min_ref_speed_mps, 0, 100);
   e.min_points = static_cast<std::size_t>(rd.integer(t, p, "min_points", 30, 5, 1'000'000));
   e.min_duration_s = rd.number(t, p, "min_duration_s", e.min_duration_s, 0, 600);
+  e.max_event_s = rd.number(t, p, "max_event_s", e.max_event_s, 1, 3600);
+  if (e.max_event_s <= e.min_duration_s)
+    rd.fail(p + "max_event_s", "must exceed min_duration_s");
+  e.max_speed_mps = rd.number(t, p, "max_speed_mps", e.max_speed_mps, 1, 1000);
+  e.min_speed_mps = rd.number(t, p, "min_speed_mps", e.min_speed_mps, -1000, 0);
+  e.max_pressure_bar = rd.number(t, p, "max_pressure_bar", e.max_pressure_bar, 1, 10000);
+  e.min_pressure_bar = rd.number(t, p, "min_pressure_bar", e.min_pressure_bar, -10000, 0);
+  if (e.start_pressure_bar > e.max_pressure_bar)
+    rd.fail(p + "max_pressure_bar", "must be at least start_pressure_bar");
 }
 
 void parse_tcp(const TomlReader& rd, const toml::table& t, Config& c) {
   const std::string p = "modbus_tcp.";
   rd.check_keys(t, p,
                 {"address", "port", "max_clients", "max_clients_per_address", "writable",
-                 "write_allow", "idle_timeout_s"});
+                 "write_allow", "idle_timeout_s", "protected"});
   auto& m = c.modbus_tcp;
   m.address = rd.string(t, p, "address", m.address);
   in_addr a{};
@@ -168,6 +179,10 @@ void parse_tcp(const TomlReader& rd, const toml::table& t, Config& c) {
     if (inet_pton(AF_INET, ip.c_str(), &a) != 1)
       rd.fail(p + "write_allow", "'" + ip + "' is not an IPv4 address");
   m.idle_timeout_s = rd.number(t, p, "idle_timeout_s", m.idle_timeout_s, 0.1, 86400);
+  m.protect = string_list(rd, t, p, "protected");
+  for (const auto& ip : m.protect)
+    if (inet_pton(AF_INET, ip.c_str(), &a) != 1)
+      rd.fail(p + "protected", "'" + ip + "' is not an IPv4 address");
 }
 
 void parse_store(const TomlReader& rd, const toml::table& t, Config& c) {
@@ -236,6 +251,7 @@ Config parse_config(std::string_view text, const std::string& source) {
   c.gpio.ground = c.calibration.bench == can::BenchKind::Ground;
   c.pipeline.events.sensor_timeout_s = c.sensor_timeout_s;
   c.pipeline.parallel_methods = true;
+  c.pipeline.defer_fit = true;  // the daemon journals each event before its fit
   if (const auto* t = rd.table(root, "", "pipeline")) parse_pipeline(rd, *t, c);
   if (const auto* t = rd.table(root, "", "modbus_tcp")) parse_tcp(rd, *t, c);
   if (const auto* t = rd.table(root, "", "store")) parse_store(rd, *t, c);

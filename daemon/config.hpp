@@ -24,6 +24,8 @@ struct ModbusTcpConfig {
   bool writable = false;                   ///< command holding registers accept writes
   std::vector<std::string> write_allow{};  ///< client IPv4 addresses allowed to write
   double idle_timeout_s = 60;              ///< an idle (or trickling) client is dropped after this
+  /// Client IPv4 addresses never evicted to make room (the station software's own connection).
+  std::vector<std::string> protect{};
 };
 
 struct StoreConfig {

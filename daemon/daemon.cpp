@@ -78,6 +78,7 @@ std::vector<std::uint32_t> layout_ids() {
 Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
     : config_path_(std::move(config_path)), cfg_(std::move(cfg)), sig_(sig) {
   set_log_level(cfg_.log_level);
+  lock_ = std::make_unique<InstanceLock>(cfg_.store.path);
   model_ = load_model(cfg_.model_path);
   try {
     store_ = std::make_unique<EventStore>(cfg_.store, false, kStoreBusyTimeoutMs);
@@ -130,6 +131,14 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
   pending_ = std::make_unique<PendingEvents>(cfg_.store.path + ".spill",
                                              static_cast<std::size_t>(cfg_.store.hold_in_memory),
                                              static_cast<std::size_t>(cfg_.store.max_held));
+  try {
+    pending_->check_writable();
+  } catch (const std::exception& e) {
+    throw DaemonError(kExitCantCreate,
+                      fmt::format("{} (the journal: without it a kill loses the event being "
+                                  "stored)",
+                                  e.what()));
+  }
   if (const auto n = pending_->adopt_spilled())
     spdlog::warn("{} event(s) spilled by an earlier run wait in {}: committing them first", n,
                  pending_->dir());
@@ -202,9 +211,6 @@ int Daemon::run() {
   sd_notify(0, "READY=1");
   notify_status();
   const bool paced = cfg_.kind != SourceKind::Replay || cfg_.replay_speed > 0;
-  const double wall_timeout_s =
-      cfg_.sensor_timeout_s /
-      (cfg_.kind == SourceKind::Replay ? std::max(1.0, cfg_.replay_speed) : 1.0);
   auto last_post = Clock::time_point{}, last_ping = Clock::now(), last_notify = Clock::now(),
        last_retention = Clock::time_point{};
   while (!sig_.stop) {
@@ -213,34 +219,41 @@ int Daemon::run() {
       reload_pending_ = false;
       reload();
     }
+    bool polled_empty = false;
     if (auto f = source_->next(10)) {
       const auto now = Clock::now();
+      idle_since_.reset();
       if (recorder_ && !recorder_->write(*f)) recorder_error_ = true;
       const int ch = channel_of(f->frame.id);
-      if (ch >= 0) seen_[static_cast<std::size_t>(ch)] = now;
+      if (ch >= 0) {
+        seen_[static_cast<std::size_t>(ch)] = now;
+        stamp_us_[static_cast<std::size_t>(ch)] = f->t_us;
+      }
+      newest_stamp_us_ = std::max(newest_stamp_us_, f->t_us);
       pipeline_->feed(*f);
       publish_finished(now);
-    } else if (source_->finished() && !source_finished_) {
-      source_finished_ = true;
-      pipeline_->finish();
-      publish_finished(Clock::now());
-      spdlog::info("replay finished: {} events", events_finished_);
-      if (cfg_.exit_at_end) break;
+    } else {
+      polled_empty = true;
+      if (!idle_since_) idle_since_ = Clock::now();
+      if (source_->finished() && !source_finished_) {
+        source_finished_ = true;
+        pipeline_->finish();
+        publish_finished(Clock::now());
+        spdlog::info("replay finished: {} events", events_finished_);
+        if (cfg_.exit_at_end) break;
+      }
     }
     const auto now = Clock::now();
     commit_pending(now, false);
     if (paced && pipeline_->event_active()) {
-      for (int ch = 0; ch < 3; ++ch) {
-        const auto last = seen_[static_cast<std::size_t>(ch)].value_or(start_);
-        if (std::chrono::duration<double>(now - last).count() > wall_timeout_s) {
-          spdlog::warn("sensor timeout during an event ({} silent): event aborted",
-                       ch == 0   ? "reference encoder"
-                       : ch == 1 ? "wheel encoder"
-                                 : "pressure");
-          pipeline_->abort("sensor_timeout");
-          publish_finished(now);
-          break;
-        }
+      if (const auto ch = silent_channel(now, polled_empty)) {
+        spdlog::warn("sensor timeout during an event ({} silent): event aborted",
+                     *ch == 0   ? "reference encoder"
+                     : *ch == 1 ? "wheel encoder"
+                     : *ch == 2 ? "pressure"
+                                : "every sensor");
+        pipeline_->abort("sensor_timeout");
+        publish_finished(now);
       }
     }
     for (const auto& cmd : server_->take_commands()) {
@@ -285,11 +298,7 @@ int Daemon::run() {
     publish_finished(Clock::now());
   }
   commit_pending(Clock::now(), true);
-  if (pending_->size() > 0) {
-    pending_->spill_all();
-    spdlog::warn("stopping with {} event(s) not stored: spilled to {} ({} still in memory)",
-                 pending_->size(), pending_->dir(), pending_->size() - pending_->spilled());
-  }
+  const int code = stop_pending();
   if (recorder_) recorder_->flush();
   post_status(Clock::now());
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -319,9 +328,43 @@ int Daemon::run() {
                    {"malformed", s.malformed.load()},
                    {"rejected", s.rejected.load()},
                    {"timeouts", s.timeouts.load()}};
+    j["events_lost"] = pending_->lost();
+    j["events_waiting"] = pending_->size();
     std::ofstream(cfg_.stats_file) << j.dump(2) << "\n";
   }
-  return 0;
+  return code;
+}
+
+int Daemon::stop_pending() {
+  if (pending_->size() == 0 && pending_->lost() == 0) return 0;
+  const std::size_t failed = pending_->spill_all();
+  if (pending_->size() > 0)
+    spdlog::warn("stopping with {} event(s) not stored: they wait in {}, and the next start "
+                 "commits them",
+                 pending_->size(), pending_->dir());
+  if (pending_->lost() == 0) return 0;
+  spdlog::error("{} finished event(s) lost in this run ({} at this stop): neither the store {} nor "
+                "the spill directory {} could take them",
+                pending_->lost(), failed, cfg_.store.path, pending_->dir());
+  return kExitCantCreate;
+}
+
+std::optional<int> Daemon::silent_channel(Clock::time_point now, bool polled_empty) const {
+  // In the data's own time: a process stalled (SIGSTOP, a swap storm) finds its frames queued
+  // when it runs again and ends no event for its own pause.
+  const auto timeout_us = static_cast<std::int64_t>(cfg_.sensor_timeout_s * 1e6);
+  for (int ch = 0; ch < 3; ++ch) {
+    const auto& last = stamp_us_[static_cast<std::size_t>(ch)];
+    if (last && newest_stamp_us_ - *last > timeout_us) return ch;
+  }
+  // Nothing arrives at all: judged right after a poll found nothing, so a pause of the process
+  // itself (its frames then wait in the queue, and the poll after it finds them) is not silence.
+  const double wall_timeout_s =
+      cfg_.sensor_timeout_s /
+      (cfg_.kind == SourceKind::Replay ? std::max(1.0, cfg_.replay_speed) : 1.0);
+  if (polled_empty && idle_since_ && std::chrono::duration<double>(now - *idle_since_).count() > wall_timeout_s)
+    return 3;
+  return std::nullopt;
 }
 
 }  // namespace brakefit::daemon

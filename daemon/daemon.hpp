@@ -9,6 +9,7 @@
 
 #include "core/exit_codes.hpp"
 #include "daemon/config.hpp"
+#include "daemon/instance_lock.hpp"
 #include "daemon/modbus_server.hpp"
 #include "daemon/pending.hpp"
 #include "daemon/store.hpp"
@@ -43,7 +44,19 @@ class Daemon {
  private:
   using Clock = std::chrono::steady_clock;
   void reload();
+  /// Journals each event the pipeline closed, fits it, and commits and publishes it.
   void publish_finished(Clock::time_point closed);
+  EventRecord fitted_record(const pipeline::EventResult& er, const std::string& calibration,
+                            const std::string& vehicle_id, const std::string& source,
+                            std::int64_t created_unix_s, bool count);
+  bool fit_journaled(const EventRecord& r);
+  /// A channel silent in the data's own time (its newest stamp sensor_timeout_s behind the
+  /// newest of any channel), or, right after a poll found nothing, every channel silent that
+  /// long; 3 for every channel.
+  std::optional<int> silent_channel(Clock::time_point now, bool polled_empty) const;
+  /// The clean stop: what could not be stored stays in the spill directory; what could not be
+  /// written there either is lost, counted and said. Returns the exit code.
+  int stop_pending();
   /// Commits waiting events oldest first and publishes each after its commit; on a failure
   /// stops and retries later (fresh: an event just finished, try now whatever the backoff).
   void commit_pending(Clock::time_point closed, bool fresh);
@@ -56,6 +69,7 @@ class Daemon {
   std::string config_path_;
   Config cfg_;
   Signals& sig_;
+  std::unique_ptr<InstanceLock> lock_;  ///< first taken, last released
   std::unique_ptr<const Model> model_;  ///< stable address: the pipeline points into it
   std::unique_ptr<EventStore> store_;
   std::unique_ptr<PendingEvents> pending_;
@@ -71,6 +85,9 @@ class Daemon {
   bool reload_pending_ = false;
   Clock::time_point start_;
   std::array<std::optional<Clock::time_point>, 3> seen_{};  ///< ref, wheel, pressure
+  std::array<std::optional<std::int64_t>, 3> stamp_us_{};   ///< their newest frames' stamps
+  std::int64_t newest_stamp_us_ = 0;
+  std::optional<Clock::time_point> idle_since_;  ///< polls found nothing since then
   std::string last_status_;
 };
 

@@ -14,33 +14,83 @@
 namespace brakefit::daemon {
 
 void Daemon::publish_finished(Clock::time_point closed) {
-  auto finished = pipeline_->take_events();
-  if (finished.empty()) return;
-  for (auto& er : finished) {
-    const Model* model = model_.get();
-    auto doc = event_json(er, source_->describe(), model);
-    doc["vehicle_id"] = vehicle_id_;
-    ++events_finished_;
-    if (!er.event.flags.empty()) ++events_flagged_;
-    const MethodResult* best = er.results.empty() ? nullptr : &er.results.back();
-    spdlog::info(
-        "event {} ({}): {} points, ended by {}{}{}", er.event.event_id,
-        can::to_string(er.event.bench), er.curve.size(), er.event.end_reason,
-        er.event.flags.empty() ? "" : fmt::format(" [{}]", fmt::join(er.event.flags, ",")),
-        best ? fmt::format(", {} B {:.3f} C {:.4f} D {:.1f} E {:.4f}", to_string(best->method),
-                           best->params.B, best->params.C, best->params.D, best->params.E)
-             : "");
-    pending_->push(make_record(er, doc.dump(), pipeline::format_calibration(cfg_.calibration),
-                               vehicle_id_, source_->describe(), model ? model->hash : "",
-                               static_cast<std::int64_t>(std::time(nullptr))));
+  auto events = pipeline_->take_closed();
+  if (events.empty()) return;
+  const std::string calibration = pipeline::format_calibration(pipeline_->calibration());
+  for (auto& ev : events) {
+    // 1. Durable as it closes: the raw event goes to its journal file before the fit, so a kill
+    //    from here on leaves the file, which the next start fits and commits.
+    pipeline::EventResult closed_only;
+    closed_only.event = ev;
+    EventRecord journaled =
+        make_record(closed_only, "", calibration, vehicle_id_, source_->describe(),
+                    model_ ? model_->hash : "", static_cast<std::int64_t>(std::time(nullptr)));
+    const auto t0 = Clock::now();
+    std::string path = pending_->journal(journaled);
+    spdlog::info("event {} closed ({}): {}", ev.event_id, ev.end_reason,
+                 path.empty() ? std::string("not journaled, held in memory")
+                              : fmt::format("journaled to {} in {:.2f} ms", path,
+                                            std::chrono::duration<double, std::milli>(
+                                                Clock::now() - t0)
+                                                .count()));
+    // 2. Fitted, then kept under the journal's uid (a restart finds the row it may have become).
+    EventRecord r = fitted_record(pipeline_->fit(std::move(ev), pipeline_->calibration()),
+                                  calibration, vehicle_id_, source_->describe(),
+                                  journaled.created_unix_s, true);
+    r.uid = journaled.uid;
+    pending_->push(std::move(r), std::move(path));
   }
   commit_pending(closed, true);
+}
+
+EventRecord Daemon::fitted_record(const pipeline::EventResult& er, const std::string& calibration,
+                                  const std::string& vehicle_id, const std::string& source,
+                                  std::int64_t created_unix_s, bool count) {
+  const Model* model = model_.get();
+  auto doc = event_json(er, source, model);
+  doc["vehicle_id"] = vehicle_id;
+  if (count) {
+    ++events_finished_;
+    if (!er.event.flags.empty()) ++events_flagged_;
+  }
+  const MethodResult* best = er.results.empty() ? nullptr : &er.results.back();
+  spdlog::info(
+      "event {} ({}): {} points, ended by {}{}{}", er.event.event_id,
+      can::to_string(er.event.bench), er.curve.size(), er.event.end_reason,
+      er.event.flags.empty() ? "" : fmt::format(" [{}]", fmt::join(er.event.flags, ",")),
+      best ? fmt::format(", {} B {:.3f} C {:.4f} D {:.1f} E {:.4f}", to_string(best->method),
+                         best->params.B, best->params.C, best->params.D, best->params.E)
+           : "");
+  return make_record(er, doc.dump(), calibration, vehicle_id, source, model ? model->hash : "",
+                     created_unix_s);
+}
+
+/// A journaled event that closed before a crash is fitted now, with its own calibration.
+bool Daemon::fit_journaled(const EventRecord& r) {
+  try {
+    const auto cal = pipeline::parse_calibration(r.calibration_toml, "journaled event " + r.uid);
+    EventRecord f = fitted_record(pipeline_->fit(event_from_record(r), cal), r.calibration_toml,
+                                  r.vehicle_id, r.source, r.created_unix_s, false);
+    f.uid = r.uid;
+    spdlog::info("event (pipeline id {}) closed before the last stop, fitted from its journal",
+                 r.pipeline_event_id);
+    pending_->replace_front(std::move(f));
+    return true;
+  } catch (const std::exception& e) {
+    spdlog::error("journaled event {} cannot be fitted: {}", r.uid, e.what());
+    return false;
+  }
 }
 
 void Daemon::commit_pending(Clock::time_point closed, bool fresh) {
   const auto now = Clock::now();
   if (pending_->size() == 0 || (!fresh && now < next_retry_)) return;
   while (const EventRecord* r = pending_->front()) {
+    if (!fitted(*r) && !fit_journaled(*r)) {
+      pending_->drop_front_aside("it cannot be fitted");
+      continue;
+    }
+    r = pending_->front();
     const bool spilled = pending_->front_is_spilled();
     bool samples_stored = false;
     std::optional<std::int64_t> id;

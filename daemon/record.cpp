@@ -32,6 +32,34 @@ T get(const unsigned char*& p) {
   return v;
 }
 
+/// Counts nesting only: a spill record is an object of scalars and one byte string (depth 1), so
+/// anything deeper is refused before nlohmann's recursive reader could exhaust the stack on it.
+struct DepthCheck : nlohmann::json::json_sax_t {
+  static constexpr int kMaxDepth = 8;
+  int depth = 0;
+  bool too_deep = false;
+  bool open() {
+    if (++depth <= kMaxDepth) return true;
+    too_deep = true;
+    return false;
+  }
+  bool null() override { return true; }
+  bool boolean(bool) override { return true; }
+  bool number_integer(number_integer_t) override { return true; }
+  bool number_unsigned(number_unsigned_t) override { return true; }
+  bool number_float(number_float_t, const string_t&) override { return true; }
+  bool string(string_t&) override { return true; }
+  bool binary(binary_t&) override { return true; }
+  bool start_object(std::size_t) override { return open(); }
+  bool key(string_t&) override { return true; }
+  bool end_object() override { return --depth, true; }
+  bool start_array(std::size_t) override { return open(); }
+  bool end_array() override { return --depth, true; }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::json::exception&) override {
+    return false;
+  }
+};
+
 }  // namespace
 
 std::string pack_samples(const std::vector<pipeline::Sample>& s) {
@@ -91,6 +119,23 @@ EventRecord make_record(const pipeline::EventResult& e, const std::string& resul
   return r;
 }
 
+pipeline::Event event_from_record(const EventRecord& r) {
+  pipeline::Event e;
+  e.event_id = static_cast<int>(r.pipeline_event_id);
+  e.bench = r.bench == can::to_string(can::BenchKind::Ground) ? can::BenchKind::Ground
+                                                              : can::BenchKind::Roller;
+  e.t_start_ns = r.t_start_ns;
+  e.t_end_ns = r.t_end_ns;
+  e.end_reason = r.end_reason;
+  for (std::size_t a = 0; a < r.flags.size();) {
+    const auto b = std::min(r.flags.find(',', a), r.flags.size());
+    if (b > a) e.flags.push_back(r.flags.substr(a, b - a));
+    a = b + 1;
+  }
+  e.samples = unpack_samples(r.samples_blob.data(), r.samples_blob.size());
+  return e;
+}
+
 std::string record_to_cbor(const EventRecord& r) {
   nlohmann::json j;
   j["schema"] = "brakefit.spilled_event/1";
@@ -117,6 +162,12 @@ std::string record_to_cbor(const EventRecord& r) {
 
 EventRecord record_from_cbor(std::string_view bytes, const std::string& where) {
   nlohmann::json j;
+  DepthCheck depth;
+  if (!nlohmann::json::sax_parse(bytes.begin(), bytes.end(), &depth,
+                                 nlohmann::json::input_format_t::cbor, false) &&
+      depth.too_deep)
+    throw InputError(fmt::format("{}: not a spilled event: nested deeper than {} levels", where,
+                                 DepthCheck::kMaxDepth));
   try {
     j = nlohmann::json::from_cbor(bytes.begin(), bytes.end());
   } catch (const nlohmann::json::exception& e) {

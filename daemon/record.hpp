@@ -27,6 +27,13 @@ EventRecord make_record(const pipeline::EventResult& e, const std::string& resul
                         const std::string& calibration_toml, const std::string& vehicle_id,
                         const std::string& source, const std::string& model_hash,
                         std::int64_t now_unix_s);
+/// A journaled record not fitted yet (the event closed, then the process died) has no result.
+inline bool fitted(const EventRecord& r) {
+  return !r.result_json.empty();
+}
+/// The closed event a record was made from (its samples, flags, end and bench), to be fitted.
+pipeline::Event event_from_record(const EventRecord& r);
+
 /// A record as CBOR (the spill file format) and back; the reader throws InputError naming
 /// `where` on anything that is not a complete record.
 std::string record_to_cbor(const EventRecord& r);

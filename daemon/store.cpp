@@ -1,17 +1,20 @@
 #include "daemon/store.hpp"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <sqlite3.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <ctime>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
 
 #include "core/curve.hpp"
+#include "daemon/wal_check.hpp"
 
 namespace brakefit::daemon {
 
@@ -129,12 +132,39 @@ void check_path(const std::string& path, bool read_only) {
     throw std::runtime_error(fmt::format("{}: {}", path, std::strerror(errno)));
   if (read_only && !fs::exists(p, ec))
     throw std::runtime_error(fmt::format("{}: no such event store", path));
+  // SQLite opens a store whose -wal or -shm it cannot write and fails every commit after: found
+  // here, before the daemon says READY.
+  for (const char* side : {"-wal", "-shm"}) {
+    const std::string f = path + side;
+    if (!read_only && fs::exists(f, ec) && ::access(f.c_str(), R_OK | W_OK) != 0)
+      throw std::runtime_error(fmt::format("{}: {} (the store's {} file; every commit would fail)",
+                                           f, std::strerror(errno), side + 1));
+  }
+}
+
+/// A log SQLite would replay only in part is copied aside before SQLite opens it: what it held
+/// beyond the part SQLite takes is kept for a person to look at, and said loudly.
+void keep_damaged_wal(const std::string& path, std::int64_t now_unix_s) {
+  const std::string wal = path + "-wal";
+  const WalCheck w = check_wal(wal);
+  if (!w.present || w.problem.empty()) return;
+  const std::string kept = fmt::format("{}.kept-{}", wal, now_unix_s);
+  std::error_code ec;
+  std::filesystem::copy_file(wal, kept, std::filesystem::copy_options::overwrite_existing, ec);
+  spdlog::error(
+      "{}: the write-ahead log does not end cleanly: {}; SQLite takes its first {} of {} bytes "
+      "({} commit(s)) and drops the rest. {}. Events whose journal files wait in the spill "
+      "directory are committed again from them.",
+      wal, w.problem, w.used_bytes, w.bytes, w.commits,
+      ec ? fmt::format("It could not be copied aside ({}: {})", kept, ec.message())
+         : fmt::format("A copy is kept as {}", kept));
 }
 
 }  // namespace
 
 EventStore::EventStore(const StoreConfig& c, bool read_only, int busy_timeout_ms) : cfg_(c) {
   check_path(c.path, read_only);
+  if (!read_only) keep_damaged_wal(c.path, static_cast<std::int64_t>(std::time(nullptr)));
   const int flags = read_only ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   if (sqlite3_open_v2(c.path.c_str(), &db_, flags | SQLITE_OPEN_FULLMUTEX, nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
@@ -152,6 +182,8 @@ EventStore::EventStore(const StoreConfig& c, bool read_only, int busy_timeout_ms
       exec(db_, kSchema);
       if (!has_uid_column(db_)) exec(db_, "ALTER TABLE events ADD COLUMN uid TEXT");
       exec(db_, "CREATE INDEX IF NOT EXISTS events_uid ON events(uid)");
+      probe_write();
+      checkpoint(false);
     }
     sqlite3_busy_timeout(db_, busy_timeout_ms);
   } catch (const std::exception& e) {
@@ -162,7 +194,36 @@ EventStore::EventStore(const StoreConfig& c, bool read_only, int busy_timeout_ms
 }
 
 EventStore::~EventStore() {
+  if (writable_) checkpoint(true);
   sqlite3_close(db_);
+}
+
+void EventStore::probe_write() {
+  // A real write: a store opened read-only underneath (a -shm another user owns, a read-only
+  // mount) fails here, not at the first event's commit.
+  const int rc = sqlite3_exec(db_,
+                              "CREATE TABLE IF NOT EXISTS store_meta (key TEXT PRIMARY KEY, value "
+                              "TEXT NOT NULL);"
+                              "INSERT OR REPLACE INTO store_meta VALUES ('opened_unix_s', "
+                              "strftime('%s','now'))",
+                              nullptr, nullptr, nullptr);
+  if (rc == SQLITE_BUSY) {
+    // Another process holds the write lock: writable, just not now. Events wait for it.
+    spdlog::warn("{}: locked by another process at start; events wait until it is released",
+                 cfg_.path);
+  } else if (rc != SQLITE_OK) {
+    throw std::runtime_error(fmt::format("cannot write the event store: {}", sqlite3_errmsg(db_)));
+  }
+  writable_ = true;
+}
+
+void EventStore::checkpoint(bool truncate) {
+  int log_frames = 0, done_frames = 0;
+  const int rc = sqlite3_wal_checkpoint_v2(
+      db_, nullptr, truncate ? SQLITE_CHECKPOINT_TRUNCATE : SQLITE_CHECKPOINT_PASSIVE,
+      &log_frames, &done_frames);
+  if (rc != SQLITE_OK && rc != SQLITE_BUSY)
+    spdlog::warn("{}: checkpoint: {}", cfg_.path, sqlite3_errstr(rc));
 }
 
 bool EventStore::disk_low() const {
@@ -233,6 +294,9 @@ std::optional<std::int64_t> EventStore::commit(const EventRecord& r, bool* sampl
     return std::nullopt;
   }
   if (samples_stored) *samples_stored = with_samples;
+  // The main file holds every committed event (a backup of events.db alone is whole, and a torn
+  // -wal cannot take a committed event with it); PASSIVE never waits for readers.
+  checkpoint(false);
   return id;
 }
 
@@ -260,15 +324,14 @@ std::optional<StoredEvent> EventStore::last() const {
 
 int EventStore::apply_retention(std::int64_t now_unix_s) {
   const auto cutoff = now_unix_s - static_cast<std::int64_t>(cfg_.retention_days * 86400.0);
+  // sqlite3_changes() keeps the last statement that completed: counted only when this one did.
   Stmt a(db_, "DELETE FROM events WHERE created_unix_s < ?");
   a.i64(1, cutoff);
-  sqlite3_step(a.s);
-  int n = sqlite3_changes(db_);
+  int n = sqlite3_step(a.s) == SQLITE_DONE ? sqlite3_changes(db_) : 0;
   Stmt b(db_,
          "DELETE FROM events WHERE id NOT IN (SELECT id FROM events ORDER BY id DESC LIMIT ?)");
   b.i64(1, cfg_.max_events);
-  sqlite3_step(b.s);
-  n += sqlite3_changes(db_);
+  if (sqlite3_step(b.s) == SQLITE_DONE) n += sqlite3_changes(db_);
   return n;
 }
 

@@ -1,6 +1,9 @@
 #pragma once
 // The durable event store (SQLite, WAL, synchronous=FULL): every finished event's raw samples and
-// results in one transaction, committed before the event is published. On a full disk (free
+// results in one transaction, committed before the event is published, then checkpointed (PASSIVE,
+// after every commit; TRUNCATE on close) so the main file holds what is committed. Opening for
+// writing copies a write-ahead log that does not end cleanly aside (logged) and proves the store
+// writable with a real write. On a full disk (free
 // space below min_free_mb, or SQLITE_FULL) raw samples stop being stored, results are still
 // kept, and degraded() is raised; nothing half-written is ever visible.
 #include <cstdint>
@@ -68,10 +71,13 @@ class EventStore {
 
  private:
   bool disk_low() const;
+  void probe_write();
+  void checkpoint(bool truncate);
   int insert(const EventRecord& r, bool with_samples, std::int64_t& id);
   StoreConfig cfg_;
   sqlite3* db_ = nullptr;
   bool degraded_ = false;
+  bool writable_ = false;
   std::string error_;
 };
 

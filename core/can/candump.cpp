@@ -89,8 +89,12 @@ Frame parse_frame_text(std::string_view text) {
 }
 
 std::optional<LoggedFrame> parse_candump_line(std::string_view line) {
-  while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.remove_suffix(1);
-  if (line.empty() || line.front() != '(') return std::nullopt;
+  while (!line.empty() && (line.back() == '\n' || line.back() == '\r' || line.back() == ' ' ||
+                           line.back() == '\t'))
+    line.remove_suffix(1);
+  if (line.empty() || line.front() == '#') return std::nullopt;  // blank or a comment
+  if (line.front() != '(')
+    throw CandumpError("not a candump line: expected '(seconds.microseconds) <interface> <frame>'");
   const auto close = line.find(')');
   if (close == std::string_view::npos) throw CandumpError("timestamp has no closing ')'");
   const std::string_view ts = line.substr(1, close - 1);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
 namespace brakefit::pipeline {
 
 std::optional<Event> EventDetector::close(const std::string& reason, bool aborted) {
@@ -19,11 +21,38 @@ std::optional<Event> EventDetector::close(const std::string& reason, bool aborte
   return e;
 }
 
+std::optional<std::string> implausible(const Sample& s, const EventSettings& set) {
+  auto out = [](double v, double lo, double hi) { return !std::isfinite(v) || v < lo || v > hi; };
+  if (out(s.v_ref_mps, set.min_speed_mps, set.max_speed_mps))
+    return fmt::format("v_ref_mps {:g} outside [{:g}, {:g}]", s.v_ref_mps, set.min_speed_mps,
+                       set.max_speed_mps);
+  if (out(s.v_wheel_mps, set.min_speed_mps, set.max_speed_mps))
+    return fmt::format("v_wheel_mps {:g} outside [{:g}, {:g}]", s.v_wheel_mps, set.min_speed_mps,
+                       set.max_speed_mps);
+  if (out(s.pressure_bar, set.min_pressure_bar, set.max_pressure_bar))
+    return fmt::format("pressure_bar {:g} outside [{:g}, {:g}]", s.pressure_bar,
+                       set.min_pressure_bar, set.max_pressure_bar);
+  return std::nullopt;
+}
+
 std::optional<Event> EventDetector::feed(const Sample& s) {
   std::optional<Event> done;
   if (cur_ && static_cast<double>(s.t_ns - last_t_ns_) * 1e-9 > set_.sensor_timeout_s)
     done = close("sensor_timeout", true);
   last_t_ns_ = s.t_ns;
+  if (const auto why = implausible(s, set_)) {
+    // Never part of an event, never the lead-in: the event running ends here, flagged.
+    if (!cur_ || done) return done;
+    auto e = close("implausible_data", true);
+    e->flags.push_back("implausible_data");
+    e->note = fmt::format("{} at t = {:.6f} s", *why, static_cast<double>(s.t_ns) * 1e-9);
+    return e;
+  }
+  if (cur_ && static_cast<double>(s.t_ns - cur_->t_start_ns) * 1e-9 > set_.max_event_s) {
+    auto e = close("max_length", true);
+    e->note = fmt::format("ran past max_event_s = {:g} s", set_.max_event_s);
+    return e;
+  }
   auto remember = [&] {
     const auto window_ns = static_cast<std::int64_t>(set_.lead_in_s * 1e9);
     before_.push_back(s);

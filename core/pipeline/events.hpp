@@ -8,6 +8,7 @@
 // fitted.
 #include <deque>
 #include <optional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,16 @@ struct EventSettings {
   /// 1 s reaches rest on ramps from 2 bar/s; 0.15 s did so only above 12 bar/s (half of
   /// generator B's roller runs started at 2 bar, the dead zone cut: read 16 % short).
   double lead_in_s = 1.0;
+  /// An event running this long ends, flagged aborted (max_length): a stuck pressure or a test
+  /// never switched off would otherwise grow without end. A slow 2 bar/s roller ramp to lock
+  /// lasts under 15 s.
+  double max_event_s = 60.0;
+  /// Plausible readings: a sample outside these (or not finite) ends a running event, flagged
+  /// aborted (implausible_data), and never starts one: no implausible reading is fitted.
+  double max_speed_mps = 100.0;   ///< both speeds; 360 km/h
+  double min_speed_mps = -0.5;    ///< an encoder read backwards beyond this is a fault
+  double max_pressure_bar = 400;  ///< hydraulic brake lines stay under 250 bar, air brakes 10
+  double min_pressure_bar = -5;   ///< a transducer's offset reads a little below zero
 };
 
 struct Event {
@@ -44,10 +55,12 @@ struct Event {
   std::int64_t t_end_ns = 0;
   std::string
       end_reason;  ///< switch_off_slip, wheel_lock, release, stopped, sensor_timeout,
-                   ///< end_of_data (aborted), end_of_file (an event file's last row: finished)
+                   ///< end_of_data (aborted), end_of_file (an event file's last row: finished),
+                   ///< max_length and implausible_data (aborted)
   /// too_short, aborted, sensor_fault; edges_lost (the GPIO reader lost edges during the event:
   /// still fitted, the speeds around the loss are suspect)
   std::vector<std::string> flags;
+  std::string note;  ///< what ended an aborted event, where the reason alone does not say
   std::vector<Sample> samples;
   /// The samples of the lead_in_s before the start (pressure under start_pressure_bar): for
   /// the gap diagnosis, not fitted, not stored.
@@ -63,6 +76,10 @@ struct Event {
 inline double slip_ratio(const Sample& s) {
   return s.v_ref_mps > 0 ? 1.0 - s.v_wheel_mps / s.v_ref_mps : 0.0;
 }
+
+/// Whether every reading of the sample lies in the settings' plausible ranges; else what is not,
+/// with its value.
+std::optional<std::string> implausible(const Sample& s, const EventSettings& set);
 
 class EventDetector {
  public:

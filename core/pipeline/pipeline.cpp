@@ -31,8 +31,15 @@ void Pipeline::abort(const std::string& reason) {
 }
 
 void Pipeline::handle(Event e) {
+  if (opt_.defer_fit)
+    closed_.push_back(std::move(e));
+  else
+    events_.push_back(fit(std::move(e), cal_));
+}
+
+EventResult Pipeline::fit(Event e, const Calibration& c) const {
   EventResult r;
-  r.curve = event_curve(e, cal_, opt_.events, opt_.force);
+  r.curve = event_curve(e, c, opt_.events, opt_.force);
   if (r.curve.size() < kMinCurvePoints && e.fittable()) e.flags.push_back("too_short");
   if (opt_.fit && e.fittable()) {
     const fit::MfFitOptions fo = fit_options_for(model_);
@@ -50,7 +57,7 @@ void Pipeline::handle(Event e) {
     }
   }
   r.event = std::move(e);
-  events_.push_back(std::move(r));
+  return r;
 }
 
 }  // namespace brakefit::pipeline

@@ -21,6 +21,9 @@ struct PipelineOptions {
   /// Run the methods of one event concurrently (the daemon: shorter event-end to publish latency).
   /// Results are identical either way; each method reads the model only.
   bool parallel_methods = false;
+  /// Closed events are handed over unfitted (take_closed), for the caller to make them durable
+  /// before the fit, then fitted with fit(): the daemon's journal. false: fitted as they close.
+  bool defer_fit = false;
 };
 
 struct EventResult {
@@ -46,6 +49,12 @@ class Pipeline {
   std::vector<EventResult>& events() { return events_; }
   /// Hands over the finished events (the daemon drains them after every frame).
   std::vector<EventResult> take_events() { return std::exchange(events_, {}); }
+  /// With defer_fit: the events closed since the last call, not fitted yet.
+  std::vector<Event> take_closed() { return std::exchange(closed_, {}); }
+  /// Fits one closed event with this pipeline's options and model, on calibration c (an event
+  /// journaled under another calibration is fitted with its own).
+  EventResult fit(Event e, const Calibration& c) const;
+  const Calibration& calibration() const { return cal_; }
   const SampleStats& sample_stats() const { return builder_.stats(); }
 
  private:
@@ -56,6 +65,7 @@ class Pipeline {
   SampleBuilder builder_;
   EventDetector detector_;
   std::vector<EventResult> events_;
+  std::vector<Event> closed_;
   std::optional<Sample> last_;
 };
 

@@ -104,11 +104,29 @@ TEST(Candump, FormatsLikeCandumpAndParsesBack) {
   EXPECT_EQ(format_frame_text(rtr), "012#R3");
 }
 
+TEST(Candump, ATextLineAmongTheFramesIsAnErrorNamingItsLineOrCountedWhenLenient) {
+  const std::string text =
+      "(1700000000.000100) can0 100#0800008903000000\n"
+      "operator note: second run\n"
+      "(1700000000.000200) can0 101#020000A702000000\n";
+  try {
+    parse_candump_text(text, "x.log", false);
+    FAIL() << "a text line was taken silently";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("x.log:2: not a candump line"), std::string::npos)
+        << e.what();
+  }
+  const CandumpText t = parse_candump_text(text, "x.log", true);
+  EXPECT_EQ(t.frames.size(), 2u);
+  EXPECT_EQ(t.malformed, 1u);
+  EXPECT_EQ(t.ignored, 0u);
+}
+
 TEST(Candump, ReplaysTheCommittedCandumpLFixture) {
   const std::string path = brakefit::test::source_path("tests/fixtures/candump_L.log");
   const CandumpText t = parse_candump_text(brakefit::test::read_text(path), path, false);
   EXPECT_EQ(t.frames.size(), 10u);
-  EXPECT_EQ(t.ignored, 3u);  // comment, text line, blank line
+  EXPECT_EQ(t.ignored, 3u);  // two comments, a blank line
   EXPECT_TRUE(t.frames[1].frame.extended);
   EXPECT_EQ(t.frames[1].frame.id, 0x12345678u);
   EXPECT_TRUE(t.frames[3].frame.remote);

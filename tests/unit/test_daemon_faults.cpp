@@ -251,11 +251,11 @@ TEST(Pending, SpillsInOrderAndARestartFindsThemOldestFirst) {
   const std::string dir = (tmp.p / "e.db.spill").string();
   {
     PendingEvents p(dir, 1, 8);
-    p.push(record(1));
-    p.push(record(2));
+    p.push(record(1), "");
+    p.push(record(2), "");
     EXPECT_EQ(p.spilled(), 0u);  // held until the store fails
     p.spill_excess();            // over hold_in_memory 1: record 1 is spilled
-    p.push(record(3));
+    p.push(record(3), "");
     p.spill_excess();  // record 2 spilled
     EXPECT_EQ(p.size(), 3u);
     EXPECT_EQ(p.spilled(), 2u);
@@ -263,7 +263,7 @@ TEST(Pending, SpillsInOrderAndARestartFindsThemOldestFirst) {
     EXPECT_EQ(p.front()->pipeline_event_id, 1);
     p.pop();
     EXPECT_EQ(p.front()->pipeline_event_id, 2);
-    p.spill_all();  // a clean stop: record 3 joins the files
+    EXPECT_EQ(p.spill_all(), 0u);  // a clean stop: record 3 joins the files
     EXPECT_EQ(p.spilled(), 2u);
   }
   // A corrupt file among them is moved aside, not a crash and not a silent stop.
@@ -286,7 +286,7 @@ TEST(Pending, WhenSpillingFailsTooEventsBeyondTheCapAreCountedLost) {
   std::ofstream(tmp.p / "file") << "x";
   PendingEvents p((tmp.p / "file" / "spill").string(), 0, 2);  // cannot create a directory there
   for (int i = 1; i <= 5; ++i) {
-    p.push(record(i));
+    p.push(record(i), "");
     p.spill_excess();
   }
   EXPECT_EQ(p.size(), 2u);

@@ -1,0 +1,91 @@
+// Events that must end however the data behaves: at their maximum length (a pressure stuck on,
+// a test never switched off), at an implausible reading (never fitted, never silent), and the
+// daemon's deferred fit giving exactly the results of the fit made as the event closes.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/pipeline/pipeline.hpp"
+
+using namespace brakefit;
+using namespace brakefit::pipeline;
+
+namespace {
+
+Sample at(int i, double v_ref, double v_wheel, double p_bar) {
+  Sample s;
+  s.t_ns = static_cast<std::int64_t>(i) * 1'000'000;
+  s.v_ref_mps = v_ref;
+  s.v_wheel_mps = v_wheel;
+  s.pressure_bar = p_bar;
+  s.state = can::TestState::Measuring;
+  return s;
+}
+
+bool has(const Event& e, const std::string& flag) {
+  return std::find(e.flags.begin(), e.flags.end(), flag) != e.flags.end();
+}
+
+}  // namespace
+
+TEST(EventLimits, AnEventThatNeverEndsEndsAtMaxEventSeconds) {
+  EventSettings es;
+  es.max_event_s = 2.0;
+  EventDetector det(Calibration{}, es);
+  std::optional<Event> ev;
+  int i = 0;
+  for (; i < 10'000 && !ev; ++i) ev = det.feed(at(i, 1.39, 1.39 * 0.9, 3.0));  // stuck at 3 bar
+  ASSERT_TRUE(ev);
+  EXPECT_EQ(ev->end_reason, "max_length");
+  EXPECT_TRUE(has(*ev, "aborted"));
+  EXPECT_NEAR(static_cast<double>(i), 2001.0, 2.0);  // 1 kHz: 2 s after the start
+  EXPECT_NE(ev->note.find("max_event_s"), std::string::npos);
+}
+
+TEST(EventLimits, AnImplausibleReadingEndsTheEventFlaggedAndNeverStartsOne) {
+  const double huge = 1e308, nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Sample& bad : {at(100, huge, 1.0, 5.0), at(100, 1.39, -5.0, 5.0),
+                            at(100, 1.39, 1.3, 9000.0), at(100, nan, 1.3, 5.0)}) {
+    EventDetector det(Calibration{}, EventSettings{});
+    std::optional<Event> ev;
+    for (int i = 0; i < 100; ++i) ASSERT_FALSE(det.feed(at(i, 1.39, 1.39 * (1 - 0.001 * i), 5.0)));
+    ev = det.feed(bad);
+    ASSERT_TRUE(ev);
+    EXPECT_EQ(ev->end_reason, "implausible_data");
+    EXPECT_TRUE(has(*ev, "implausible_data"));
+    EXPECT_FALSE(ev->fittable());
+    EXPECT_EQ(ev->samples.size(), 100u);  // the implausible sample is not in it
+    EXPECT_NE(ev->note.find("outside"), std::string::npos) << ev->note;
+  }
+  // Implausible readings with the brake on start nothing.
+  EventDetector det(Calibration{}, EventSettings{});
+  for (int i = 0; i < 100; ++i) EXPECT_FALSE(det.feed(at(i, huge, 1.0, 5.0)));
+  EXPECT_FALSE(det.active());
+}
+
+TEST(EventLimits, TheDeferredFitGivesTheResultsOfTheFitMadeAtTheClose) {
+  Calibration cal;
+  PipelineOptions now, deferred;
+  now.methods = deferred.methods = {Method::Lm};
+  deferred.defer_fit = true;
+  Pipeline a(cal, now, nullptr), b(cal, deferred, nullptr);
+  for (int i = 0; i < 3000; ++i) {
+    const double slip = 0.27 * i / 2000.0;
+    const auto s = at(i, 1.39, 1.39 * (1 - slip), i < 2990 ? 0.02 * i + 2.0 : 0.0);
+    a.feed(s);
+    b.feed(s);
+  }
+  auto fitted = a.take_events();
+  auto closed = b.take_closed();
+  ASSERT_EQ(fitted.size(), 1u);
+  ASSERT_EQ(closed.size(), 1u);
+  EXPECT_TRUE(b.take_events().empty());  // nothing fitted behind the caller's back
+  const auto later = b.fit(std::move(closed[0]), cal);
+  ASSERT_EQ(later.results.size(), 1u);
+  ASSERT_EQ(fitted[0].results.size(), 1u);
+  EXPECT_EQ(later.results[0].params.B, fitted[0].results[0].params.B);
+  EXPECT_EQ(later.results[0].params.D, fitted[0].results[0].params.D);
+  EXPECT_EQ(later.event.end_reason, fitted[0].event.end_reason);
+}
