@@ -188,11 +188,12 @@ void parse_tcp(const TomlReader& rd, const toml::table& t, Config& c) {
 void parse_store(const TomlReader& rd, const toml::table& t, Config& c) {
   const std::string p = "store.";
   rd.check_keys(t, p,
-                {"path", "retention_days", "max_events", "min_free_mb", "store_samples",
+                {"path", "spill_dir", "retention_days", "max_events", "min_free_mb", "store_samples",
                  "hold_in_memory", "max_held", "retry_max_s"});
   auto& s = c.store;
   s.path = rd.string(t, p, "path", s.path);
   if (s.path.empty()) rd.fail(p + "path", "must not be empty");
+  s.spill_dir = rd.string(t, p, "spill_dir", "");
   s.retention_days = rd.number(t, p, "retention_days", s.retention_days, 0.0001, 36500);
   s.max_events = static_cast<int>(rd.integer(t, p, "max_events", s.max_events, 1, 100'000'000));
   s.min_free_mb = rd.number(t, p, "min_free_mb", s.min_free_mb, 0, 1e7);

@@ -34,8 +34,11 @@ struct StoreConfig {
   int max_events = 100000;
   double min_free_mb = 64;  ///< below this, raw samples stop being stored (results are kept)
   bool store_samples = true;
-  /// While commits fail, finished events wait unpublished: this many in memory, the rest spilled
-  /// to PATH.spill/ (0: every waiting event is spilled at once, so a kill -9 loses none).
+  /// The journal and spill directory; empty: PATH.spill. Another filesystem keeps events when
+  /// the store's is full.
+  std::string spill_dir;
+  /// While commits fail, finished events wait unpublished: this many keep a copy in memory, the
+  /// rest are read back from their journal files (every event is journaled as it closes).
   int hold_in_memory = 0;
   int max_held = 256;        ///< in memory when spilling fails too; older ones are dropped, counted
   double retry_max_s = 5.0;  ///< commit retries back off from 0.1 s to this

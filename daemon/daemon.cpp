@@ -128,7 +128,8 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
   }
   use_replay_calibration(cfg_, config_path_);
   pipeline_ = std::make_unique<pipeline::Pipeline>(cfg_.calibration, cfg_.pipeline, model_.get());
-  pending_ = std::make_unique<PendingEvents>(cfg_.store.path + ".spill",
+  pending_ = std::make_unique<PendingEvents>(cfg_.store.spill_dir.empty() ? cfg_.store.path + ".spill"
+                                                                          : cfg_.store.spill_dir,
                                              static_cast<std::size_t>(cfg_.store.hold_in_memory),
                                              static_cast<std::size_t>(cfg_.store.max_held));
   try {
@@ -172,15 +173,18 @@ void Daemon::reload() {
     Config next = load_config(config_path_);
     if (next.kind != cfg_.kind || next.replay_file != cfg_.replay_file ||
         next.can_interface != cfg_.can_interface || next.modbus_tcp.port != cfg_.modbus_tcp.port ||
-        next.modbus_tcp.address != cfg_.modbus_tcp.address || next.store.path != cfg_.store.path)
+        next.modbus_tcp.address != cfg_.modbus_tcp.address || next.store.path != cfg_.store.path ||
+        next.store.spill_dir != cfg_.store.spill_dir)
       spdlog::warn(
-          "reload: changes to [source], the Modbus address/port or the store path need a restart");
+          "reload: changes to [source], the Modbus address/port or the store or spill paths need a "
+          "restart");
     next.kind = cfg_.kind;
     next.replay_file = cfg_.replay_file;
     next.can_interface = cfg_.can_interface;
     next.modbus_tcp.port = cfg_.modbus_tcp.port;
     next.modbus_tcp.address = cfg_.modbus_tcp.address;
     next.store.path = cfg_.store.path;
+    next.store.spill_dir = cfg_.store.spill_dir;
     // Everything new is built aside; nothing running is touched until all of it has loaded.
     // The model is re-read even when its path is unchanged: a retrained file may sit there.
     use_replay_calibration(next, config_path_);

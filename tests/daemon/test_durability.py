@@ -150,6 +150,22 @@ class DurabilityTest(unittest.TestCase):
         with open(d.stats) as f:
             self.assertEqual(json.load(f)["events_lost"], 3)
 
+    def test_the_journal_may_live_on_another_filesystem(self):
+        log = self.three_events_log()
+        store = os.path.join(self.tmp, "j.db")
+        journal = os.path.join(self.tmp, "elsewhere", "journal")
+        d = self.start(log, store=store, speed=4.0, extra=f'spill_dir = "{journal}"\n')
+        d.probe()
+        lock = hold_lock(store)
+        d.wait_events(3, timeout=60)
+        self.assertEqual(len([f for f in os.listdir(journal) if f.endswith(".cbor")]), 3)
+        self.assertFalse(os.path.exists(store + ".spill"))
+        lock.rollback()
+        lock.close()
+        self.assertEqual(d.stop(), 0)
+        self.assertEqual(len(stored(store)), 3)
+        self.assertEqual([f for f in os.listdir(journal) if f.endswith(".cbor")], [])
+
     def test_crafted_spill_files_at_start_strand_nothing(self):
         log = self.three_events_log()
         store = os.path.join(self.tmp, "c.db")
