@@ -15,7 +15,7 @@ import unittest
 import test_daemon
 import json
 
-from daemontools import DAEMON, MODEL, stored
+from daemontools import BENCH, DAEMON, MODEL, stored
 from logtools import read_text
 from test_faults import hold_lock
 
@@ -165,6 +165,51 @@ class DurabilityTest(unittest.TestCase):
         self.assertEqual(d.stop(), 0)
         self.assertEqual(len(stored(store)), 3)
         self.assertEqual([f for f in os.listdir(journal) if f.endswith(".cbor")], [])
+
+    @unittest.skipUnless(os.geteuid() == 0, "needs root to mount a 512 KB tmpfs for the store")
+    def test_a_full_small_disk_a_held_lock_and_a_stop_lose_nothing_silently(self):
+        mnt = os.path.join(self.tmp, "small")
+        os.makedirs(mnt)
+        r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=512k", "tmpfs", mnt],
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            self.skipTest(f"cannot mount a tmpfs here: {r.stderr.strip()}")
+        try:
+            log = self.three_events_log()
+            store = os.path.join(mnt, "events.db")
+            stats = os.path.join(self.tmp, "small.stats.json")
+            err = os.path.join(self.tmp, "small.log")
+            cfg = os.path.join(self.tmp, "small.toml")
+            with open(cfg, "w") as f:
+                f.write(f'[daemon]\nmodel = "{MODEL}"\nstats_file = "{stats}"\n'
+                        f'[source]\nkind = "replay"\nfile = "{log}"\nspeed = 8\nloop = true\n'
+                        f'{BENCH}\n[modbus_tcp]\naddress = "127.0.0.1"\nport = 0\n'
+                        f'[store]\npath = "{store}"\nmin_free_mb = 0\n')
+            with open(err, "w") as ef:
+                proc = subprocess.Popen([DAEMON, "--config", cfg], stdout=ef, stderr=ef)
+            time.sleep(1.0)
+            lock = hold_lock(store)
+            time.sleep(6.0)
+            proc.send_signal(signal.SIGTERM)
+            rc = proc.wait(timeout=30)
+            lock.rollback()
+            lock.close()
+            text = read_text(err)
+            closed = len(CLOSED.findall(text.encode()))
+            with open(stats) as f:
+                lost = json.load(f)["events_lost"]
+            spilled = len([x for x in os.listdir(store + ".spill") if x.endswith(".cbor")])
+            rows = len(stored(store))
+            self.assertGreater(closed, 5, text)
+            # Each finished event is stored, waits in a journal file, or is counted lost.
+            self.assertEqual(rows + spilled + lost, closed, text)
+            if lost:
+                self.assertEqual(rc, 73, text)
+                self.assertIn(f"{lost} finished event(s) lost in this run", text)
+            else:
+                self.assertEqual(rc, 0, text)
+        finally:
+            subprocess.run(["umount", "-l", mnt])
 
     def test_crafted_spill_files_at_start_strand_nothing(self):
         log = self.three_events_log()
