@@ -42,6 +42,12 @@ def free_port():
     return p
 
 
+def brakefitd_version(build):
+    out = subprocess.run([os.path.join(build, "daemon", "brakefitd"), "--version"],
+                         capture_output=True, text=True)
+    return out.stdout.split()[-1]
+
+
 def cpu_s(pid):
     f = read_text(f"/proc/{pid}/stat").rsplit(")", 1)[1].split()
     return (int(f[11]) + int(f[12])) / TICK

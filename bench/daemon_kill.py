@@ -26,7 +26,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests", "daemon"))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from daemon_bench import Run, log  # noqa: E402
+from daemon_bench import Run, brakefitd_version, log  # noqa: E402
 from logtools import concat, read_log, read_text, write_log  # noqa: E402
 
 REC = os.path.join(ROOT, "data", "recorded")
@@ -109,8 +109,7 @@ def main():
         log(f"kill {k + 1:2d} at {t_kill:4.2f} s{' (event running)' if active else ''}: "
             f"{finished} finished, {new_rows} rows added, {len(shown)} shown, {missing} shown but "
             f"not stored, {spilled} spilled, integrity {ok}, lost {lost}")
-    version = subprocess.run([os.path.join(args.build, "daemon", "brakefitd"), "--version"],
-                             capture_output=True, text=True).stdout.split()[-1]
+    version = brakefitd_version(args.build)
     doc = {"schema": "brakefit.daemon_kill/1", "version": version, "seed": args.seed, **totals}
     print(f"kills      : {totals['kills']} ({totals['killed_during_event']} during an event)")
     print(f"published  : {totals['published']} event ids shown, {totals['published_missing']} not in the store "

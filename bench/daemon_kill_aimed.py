@@ -25,7 +25,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests", "daemon"))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from daemon_bench import Run, log  # noqa: E402
+from daemon_bench import Run, brakefitd_version, log  # noqa: E402
 from logtools import concat, read_log, write_log  # noqa: E402
 
 REC = os.path.join(ROOT, "data", "recorded")
@@ -89,8 +89,7 @@ def main():
     left = [f for f in os.listdir(db + ".spill") if f.endswith(".cbor")]
     journal_ms.sort()
     q = lambda p: journal_ms[min(len(journal_ms) - 1, int(p * len(journal_ms)))] if journal_ms else float("nan")  # noqa: E731
-    version = subprocess.run([os.path.join(args.build, "daemon", "brakefitd"), "--version"],
-                             capture_output=True, text=True).stdout.split()[-1]
+    version = brakefitd_version(args.build)
     doc = {"schema": "brakefit.daemon_kill_aimed/1", "version": version, "seed": args.seed,
            "kills": len(plan), "offsets_ms": list(OFFSETS_MS), "closed": closed, "stored": rows,
            "lost": max(0, closed - rows), "duplicated": rows - distinct, "spill_files_left": len(left),

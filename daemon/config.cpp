@@ -120,11 +120,11 @@ void parse_rtu(const TomlReader& rd, const toml::table& t, Config& c) {
 
 void parse_pipeline(const TomlReader& rd, const toml::table& t, Config& c) {
   const std::string p = "pipeline.";
-  rd.check_keys(t, p,
-                {"methods", "force", "start_pressure_bar", "release_pressure_bar",
-                 "lock_slip_ratio", "min_ref_speed_mps", "min_points", "min_duration_s",
-                 "max_event_s", "max_speed_mps", "min_speed_mps", "max_pressure_bar",
-                 "min_pressure_bar"});
+  rd.check_keys(
+      t, p,
+      {"methods", "force", "start_pressure_bar", "release_pressure_bar", "lock_slip_ratio",
+       "min_ref_speed_mps", "min_points", "min_duration_s", "max_event_s", "max_speed_mps",
+       "min_speed_mps", "max_pressure_bar", "min_pressure_bar"});
   auto& o = c.pipeline;
   if (t.get("methods")) {
     o.methods.clear();
@@ -149,8 +149,7 @@ void parse_pipeline(const TomlReader& rd, const toml::table& t, Config& c) {
   e.min_points = static_cast<std::size_t>(rd.integer(t, p, "min_points", 30, 5, 1'000'000));
   e.min_duration_s = rd.number(t, p, "min_duration_s", e.min_duration_s, 0, 600);
   e.max_event_s = rd.number(t, p, "max_event_s", e.max_event_s, 1, 3600);
-  if (e.max_event_s <= e.min_duration_s)
-    rd.fail(p + "max_event_s", "must exceed min_duration_s");
+  if (e.max_event_s <= e.min_duration_s) rd.fail(p + "max_event_s", "must exceed min_duration_s");
   e.max_speed_mps = rd.number(t, p, "max_speed_mps", e.max_speed_mps, 1, 1000);
   e.min_speed_mps = rd.number(t, p, "min_speed_mps", e.min_speed_mps, -1000, 0);
   e.max_pressure_bar = rd.number(t, p, "max_pressure_bar", e.max_pressure_bar, 1, 10000);
@@ -188,8 +187,8 @@ void parse_tcp(const TomlReader& rd, const toml::table& t, Config& c) {
 void parse_store(const TomlReader& rd, const toml::table& t, Config& c) {
   const std::string p = "store.";
   rd.check_keys(t, p,
-                {"path", "spill_dir", "retention_days", "max_events", "min_free_mb", "store_samples",
-                 "hold_in_memory", "max_held", "retry_max_s"});
+                {"path", "spill_dir", "retention_days", "max_events", "min_free_mb",
+                 "store_samples", "hold_in_memory", "max_held", "retry_max_s"});
   auto& s = c.store;
   s.path = rd.string(t, p, "path", s.path);
   if (s.path.empty()) rd.fail(p + "path", "must not be empty");

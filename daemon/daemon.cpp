@@ -128,10 +128,10 @@ Daemon::Daemon(std::string config_path, Config cfg, Signals& sig)
   }
   use_replay_calibration(cfg_, config_path_);
   pipeline_ = std::make_unique<pipeline::Pipeline>(cfg_.calibration, cfg_.pipeline, model_.get());
-  pending_ = std::make_unique<PendingEvents>(cfg_.store.spill_dir.empty() ? cfg_.store.path + ".spill"
-                                                                          : cfg_.store.spill_dir,
-                                             static_cast<std::size_t>(cfg_.store.hold_in_memory),
-                                             static_cast<std::size_t>(cfg_.store.max_held));
+  pending_ = std::make_unique<PendingEvents>(
+      cfg_.store.spill_dir.empty() ? cfg_.store.path + ".spill" : cfg_.store.spill_dir,
+      static_cast<std::size_t>(cfg_.store.hold_in_memory),
+      static_cast<std::size_t>(cfg_.store.max_held));
   try {
     pending_->check_writable();
   } catch (const std::exception& e) {
@@ -343,13 +343,15 @@ int Daemon::stop_pending() {
   if (pending_->size() == 0 && pending_->lost() == 0) return 0;
   const std::size_t failed = pending_->spill_all();
   if (pending_->size() > 0)
-    spdlog::warn("stopping with {} event(s) not stored: they wait in {}, and the next start "
-                 "commits them",
-                 pending_->size(), pending_->dir());
+    spdlog::warn(
+        "stopping with {} event(s) not stored: they wait in {}, and the next start "
+        "commits them",
+        pending_->size(), pending_->dir());
   if (pending_->lost() == 0) return 0;
-  spdlog::error("{} finished event(s) lost in this run ({} at this stop): neither the store {} nor "
-                "the spill directory {} could take them",
-                pending_->lost(), failed, cfg_.store.path, pending_->dir());
+  spdlog::error(
+      "{} finished event(s) lost in this run ({} at this stop): neither the store {} nor "
+      "the spill directory {} could take them",
+      pending_->lost(), failed, cfg_.store.path, pending_->dir());
   return kExitCantCreate;
 }
 
@@ -366,7 +368,8 @@ std::optional<int> Daemon::silent_channel(Clock::time_point now, bool polled_emp
   const double wall_timeout_s =
       cfg_.sensor_timeout_s /
       (cfg_.kind == SourceKind::Replay ? std::max(1.0, cfg_.replay_speed) : 1.0);
-  if (polled_empty && idle_since_ && std::chrono::duration<double>(now - *idle_since_).count() > wall_timeout_s)
+  if (polled_empty && idle_since_ &&
+      std::chrono::duration<double>(now - *idle_since_).count() > wall_timeout_s)
     return 3;
   return std::nullopt;
 }

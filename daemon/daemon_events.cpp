@@ -27,16 +27,16 @@ void Daemon::publish_finished(Clock::time_point closed) {
                     model_ ? model_->hash : "", static_cast<std::int64_t>(std::time(nullptr)));
     const auto t0 = Clock::now();
     std::string path = pending_->journal(journaled);
-    spdlog::info("event {} closed ({}): {}", ev.event_id, ev.end_reason,
-                 path.empty() ? std::string("not journaled, held in memory")
-                              : fmt::format("journaled to {} in {:.2f} ms", path,
-                                            std::chrono::duration<double, std::milli>(
-                                                Clock::now() - t0)
-                                                .count()));
+    spdlog::info(
+        "event {} closed ({}): {}", ev.event_id, ev.end_reason,
+        path.empty()
+            ? std::string("not journaled, held in memory")
+            : fmt::format("journaled to {} in {:.2f} ms", path,
+                          std::chrono::duration<double, std::milli>(Clock::now() - t0).count()));
     // 2. Fitted, then kept under the journal's uid (a restart finds the row it may have become).
-    EventRecord r = fitted_record(pipeline_->fit(std::move(ev), pipeline_->calibration()),
-                                  calibration, vehicle_id_, source_->describe(),
-                                  journaled.created_unix_s, true);
+    EventRecord r =
+        fitted_record(pipeline_->fit(std::move(ev), pipeline_->calibration()), calibration,
+                      vehicle_id_, source_->describe(), journaled.created_unix_s, true);
     r.uid = journaled.uid;
     pending_->push(std::move(r), std::move(path));
   }

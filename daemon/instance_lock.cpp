@@ -17,11 +17,15 @@ InstanceLock::InstanceLock(const std::string& store_path) : path_(store_path + "
   std::error_code ec;
   const auto dir = std::filesystem::path(path_).parent_path();
   if (!dir.empty()) std::filesystem::create_directories(dir, ec);
-  fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0640);
+  fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+  // Another user's lock file (a run as root before the service's own user) still locks: flock
+  // needs no write access.
+  const int open_errno = errno;
+  if (fd_ < 0 && open_errno == EACCES)
+    fd_ = ::open(path_.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
   if (fd_ < 0)
-    throw ExitError(kExitCantCreate,
-                    fmt::format("{}: cannot create the store's lock file: {}", path_,
-                                std::strerror(errno)));
+    throw ExitError(kExitCantCreate, fmt::format("{}: cannot create the store's lock file: {}",
+                                                 path_, std::strerror(open_errno)));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     char buf[32] = {};
@@ -36,13 +40,12 @@ InstanceLock::InstanceLock(const std::string& store_path) : path_(store_path + "
                                   "daemon (give this one its own [store] path)",
                                   path_, pid.empty() ? "" : fmt::format(" (pid {})", pid)));
     }
-    throw ExitError(kExitCantCreate,
-                    fmt::format("{}: cannot lock: {}", path_, std::strerror(err)));
+    throw ExitError(kExitCantCreate, fmt::format("{}: cannot lock: {}", path_, std::strerror(err)));
   }
+  // The pid is for a refused second instance's message only; the lock is what counts.
   const std::string pid = fmt::format("{}\n", ::getpid());
-  if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
-    // The pid is for the refusal's message only; the lock is what counts.
-  }
+  [[maybe_unused]] const bool noted =
+      ::ftruncate(fd_, 0) == 0 && ::pwrite(fd_, pid.data(), pid.size(), 0) >= 0;
 }
 
 InstanceLock::~InstanceLock() {

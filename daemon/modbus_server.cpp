@@ -303,8 +303,8 @@ void ModbusServer::run() {
         std::vector<ConnectionView> open;
         open.reserve(clients.size());
         for (const auto& c : clients) open.push_back({c.ip, c.last_byte});
-        const Admission a =
-            admit_connection(open, ip, cfg_.max_clients, cfg_.max_clients_per_address, cfg_.protect);
+        const Admission a = admit_connection(open, ip, cfg_.max_clients,
+                                             cfg_.max_clients_per_address, cfg_.protect);
         if (a.evict) {
           auto victim = std::next(clients.begin(), static_cast<std::ptrdiff_t>(*a.evict));
           note_rejection(fmt::format("evicted {} for {} ({})", victim->ip, ip, a.reason));

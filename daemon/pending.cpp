@@ -79,8 +79,8 @@ EventRecord read_spill_file(const std::string& path, std::size_t max_bytes) {
   if (fd < 0) {
     struct stat l {};
     if (errno == ELOOP && ::lstat(path.c_str(), &l) == 0)
-      throw InputError(fmt::format("{}: {}, not a spill file (not followed)", path,
-                                   file_kind(l.st_mode)));
+      throw InputError(
+          fmt::format("{}: {}, not a spill file (not followed)", path, file_kind(l.st_mode)));
     throw InputError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
   }
   struct Closer {
@@ -177,7 +177,7 @@ std::string PendingEvents::next_path(const EventRecord& r) {
 std::string PendingEvents::journal(const EventRecord& r) {
   std::error_code ec;
   fs::create_directories(dir_, ec);
-  const std::string path = next_path(r);
+  std::string path = next_path(r);
   std::string err;
   if (ec || !write_durably(path, record_to_cbor(r), err)) {
     spdlog::error("cannot journal event (pipeline id {}) to {}: {}", r.pipeline_event_id, dir_,
@@ -289,8 +289,8 @@ std::size_t PendingEvents::spill_all() {
 }
 
 std::size_t PendingEvents::spilled() const {
-  return static_cast<std::size_t>(
-      std::count_if(entries_.begin(), entries_.end(), [](const Entry& e) { return !e.path.empty(); }));
+  return static_cast<std::size_t>(std::count_if(entries_.begin(), entries_.end(),
+                                                [](const Entry& e) { return !e.path.empty(); }));
 }
 
 }  // namespace brakefit::daemon

@@ -7,9 +7,9 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <ctime>
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <stdexcept>
 
@@ -220,8 +220,8 @@ void EventStore::probe_write() {
 void EventStore::checkpoint(bool truncate) {
   int log_frames = 0, done_frames = 0;
   const int rc = sqlite3_wal_checkpoint_v2(
-      db_, nullptr, truncate ? SQLITE_CHECKPOINT_TRUNCATE : SQLITE_CHECKPOINT_PASSIVE,
-      &log_frames, &done_frames);
+      db_, nullptr, truncate ? SQLITE_CHECKPOINT_TRUNCATE : SQLITE_CHECKPOINT_PASSIVE, &log_frames,
+      &done_frames);
   if (rc != SQLITE_OK && rc != SQLITE_BUSY)
     spdlog::warn("{}: checkpoint: {}", cfg_.path, sqlite3_errstr(rc));
 }

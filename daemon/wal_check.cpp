@@ -69,8 +69,8 @@ WalCheck check_wal(const std::string& wal_path) {
   while (off < b.size()) {
     ++frame;
     if (b.size() - off < frame_size) {
-      w.problem = fmt::format("frame {} is cut short ({} of {} bytes)", frame, b.size() - off,
-                              frame_size);
+      w.problem =
+          fmt::format("frame {} is cut short ({} of {} bytes)", frame, b.size() - off, frame_size);
       break;
     }
     const unsigned char* f = b.data() + off;

@@ -10,10 +10,10 @@
 namespace brakefit::daemon {
 
 struct WalCheck {
-  bool present = false;         ///< the file exists and is not empty
-  std::uint64_t bytes = 0;      ///< its size
-  std::uint64_t used_bytes = 0; ///< header + frames up to the last commit: what SQLite replays
-  std::uint64_t commits = 0;    ///< commit frames in that prefix
+  bool present = false;          ///< the file exists and is not empty
+  std::uint64_t bytes = 0;       ///< its size
+  std::uint64_t used_bytes = 0;  ///< header + frames up to the last commit: what SQLite replays
+  std::uint64_t commits = 0;     ///< commit frames in that prefix
   /// Empty when the log ends cleanly: after its last commit only frames of an earlier generation
   /// (another salt) or nothing. Else what is wrong: a bad header, a frame failing its checksum,
   /// a partial frame, or frames written after the last commit that no commit closes.

@@ -89,8 +89,8 @@ Frame parse_frame_text(std::string_view text) {
 }
 
 std::optional<LoggedFrame> parse_candump_line(std::string_view line) {
-  while (!line.empty() && (line.back() == '\n' || line.back() == '\r' || line.back() == ' ' ||
-                           line.back() == '\t'))
+  while (!line.empty() &&
+         (line.back() == '\n' || line.back() == '\r' || line.back() == ' ' || line.back() == '\t'))
     line.remove_suffix(1);
   if (line.empty() || line.front() == '#') return std::nullopt;  // blank or a comment
   if (line.front() != '(')

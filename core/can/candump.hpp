@@ -29,7 +29,8 @@ std::string format_frame_text(const Frame& f);
 struct CandumpText {
   std::vector<LoggedFrame> frames;
   std::size_t lines = 0;
-  std::size_t ignored = 0;    ///< blank and '#' comment lines (any other line is a frame or malformed)
+  std::size_t ignored =
+      0;  ///< blank and '#' comment lines (any other line is a frame or malformed)
   std::size_t malformed = 0;  ///< skipped in lenient mode
 };
 /// Parses a whole log. Malformed lines throw InputError "SOURCE:LINE: ..." unless lenient, where

@@ -8,7 +8,6 @@
 // fitted.
 #include <deque>
 #include <optional>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -53,10 +52,9 @@ struct Event {
   can::BenchKind bench = can::BenchKind::Roller;
   std::int64_t t_start_ns = 0;
   std::int64_t t_end_ns = 0;
-  std::string
-      end_reason;  ///< switch_off_slip, wheel_lock, release, stopped, sensor_timeout,
-                   ///< end_of_data (aborted), end_of_file (an event file's last row: finished),
-                   ///< max_length and implausible_data (aborted)
+  std::string end_reason;  ///< switch_off_slip, wheel_lock, release, stopped, sensor_timeout,
+                           ///< end_of_data (aborted), end_of_file (an event file's last row:
+                           ///< finished), max_length and implausible_data (aborted)
   /// too_short, aborted, sensor_fault; edges_lost (the GPIO reader lost edges during the event:
   /// still fitted, the speeds around the loss are suspect)
   std::vector<std::string> flags;

@@ -48,6 +48,7 @@ EventResult Pipeline::fit(Event e, const Calibration& c) const {
       if (m == Method::Lm || model_) methods.push_back(m);
     if (opt_.parallel_methods && methods.size() > 1) {
       std::vector<std::future<MethodResult>> jobs;
+      jobs.reserve(methods.size());
       for (Method m : methods)
         jobs.push_back(std::async(std::launch::async,
                                   [&, m] { return run_method(m, model_, r.curve, fo, true); }));

@@ -263,15 +263,17 @@ class DurabilityTest(unittest.TestCase):
     def test_a_store_whose_wal_the_daemon_cannot_write_refuses_before_ready(self):
         log = self.three_events_log()
         store = os.path.join(self.tmp, "ro.db")
-        con = sqlite3.connect(store)
-        con.execute("PRAGMA journal_mode=WAL")
-        con.execute("CREATE TABLE t (x)")
-        con.execute("INSERT INTO t VALUES (1)")
-        con.commit()
+        self.recover(store)  # a store with brakefitd's schema, as a root run left it
+        con = sqlite3.connect(store)  # a root reader holds it open: its -wal and -shm are root's
+        con.execute("SELECT COUNT(*) FROM events").fetchone()
         os.chmod(self.tmp, 0o777)
-        for f in (store, store + "-wal", store + "-shm"):
-            if os.path.exists(f):
-                os.chmod(f, 0o644)
+        # The database is the daemon user's; its -wal and -shm (made by root) are not.
+        import pwd
+        nobody = pwd.getpwnam("nobody")
+        os.chown(store, nobody.pw_uid, nobody.pw_gid)
+        for f in (store + "-wal", store + "-shm"):
+            self.assertTrue(os.path.exists(f))
+            os.chmod(f, 0o644)
         os.chmod(log, 0o644)
         cfg_dir = os.path.join(self.tmp, "cfg")
         os.makedirs(cfg_dir)
@@ -293,7 +295,7 @@ class DurabilityTest(unittest.TestCase):
                             DAEMON, "--config", cfg], capture_output=True, text=True, timeout=30)
         con.close()
         self.assertEqual(r.returncode, 73, r.stderr)
-        self.assertIn("ro.db", r.stderr)
+        self.assertRegex(r.stderr, r"ro\.db-(wal|shm): Permission denied")
         self.assertNotIn("brakefitd: source", r.stderr)  # never got as far as listening
 
 

@@ -14,7 +14,11 @@
 #include <string>
 #include <vector>
 
+#include "core/curve.hpp"
+#include "core/event_json.hpp"
 #include "core/pipeline/pipeline.hpp"
+#include "daemon/config.hpp"
+#include "daemon/record.hpp"
 
 namespace brakefit::test {
 
@@ -39,6 +43,27 @@ inline pipeline::EventResult make_event(int id, std::size_t n) {
   }
   return e;
 }
+
+/// A made-up finished event as the store keeps it.
+inline daemon::EventRecord make_test_record(int id, std::size_t n = 50) {
+  const auto e = make_event(id, n);
+  return daemon::make_record(e, event_json(e, "test", nullptr).dump(), "[bench]\n", "V1", "test",
+                             "sha256:abcdef0123", 1000 + id);
+}
+
+/// The error parse_config gives for this text ("" when it parses).
+inline std::string config_error(const std::string& text) {
+  try {
+    daemon::parse_config(text, "test.toml");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+/// The smallest config that parses; tests append a table to it.
+inline const char* kMinimalConfig =
+    "[source]\nkind = \"replay\"\nfile = \"x.log\"\n[bench]\nkind = \"roller\"\n";
 
 struct TempDir {
   std::filesystem::path p;

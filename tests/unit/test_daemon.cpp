@@ -25,26 +25,14 @@
 
 using namespace brakefit;
 using namespace brakefit::daemon;
+using brakefit::test::config_error;
+using brakefit::test::kMinimalConfig;
 using brakefit::test::make_event;
 using brakefit::test::raw_connect;
 using brakefit::test::raw_recv;
 using brakefit::test::TempDir;
 
-namespace {
-
-std::string config_error(const std::string& text) {
-  try {
-    parse_config(text, "test.toml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
-const char* kMinimal =
-    "[source]\nkind = \"replay\"\nfile = \"x.log\"\n[bench]\nkind = \"roller\"\n";
-
-}  // namespace
+namespace {}  // namespace
 
 TEST(Config, TheShippedExampleParses) {
   const Config c = parse_config(test::read_text(test::source_path("config/brakefitd.toml")),
@@ -58,32 +46,32 @@ TEST(Config, TheShippedExampleParses) {
 }
 
 TEST(Config, ErrorsNameTheKey) {
-  EXPECT_EQ(config_error(kMinimal), "");
-  EXPECT_NE(config_error(std::string(kMinimal) + "[modbus_tcp]\nprot = 1502\n")
+  EXPECT_EQ(config_error(kMinimalConfig), "");
+  EXPECT_NE(config_error(std::string(kMinimalConfig) + "[modbus_tcp]\nprot = 1502\n")
                 .find("key 'modbus_tcp.prot': unknown key"),
             std::string::npos);
-  EXPECT_NE(config_error(std::string(kMinimal) + "[modbus_tcp]\nport = \"1502\"\n")
+  EXPECT_NE(config_error(std::string(kMinimalConfig) + "[modbus_tcp]\nport = \"1502\"\n")
                 .find("key 'modbus_tcp.port': expected an integer"),
             std::string::npos);
-  EXPECT_NE(config_error(std::string(kMinimal) + "[modbus_tcp]\nport = 70000\n")
+  EXPECT_NE(config_error(std::string(kMinimalConfig) + "[modbus_tcp]\nport = 70000\n")
                 .find("key 'modbus_tcp.port': value 70000 is outside"),
             std::string::npos);
-  EXPECT_NE(config_error(std::string(kMinimal) + "[daemon]\nsensor_timeout_s = -1\n")
+  EXPECT_NE(config_error(std::string(kMinimalConfig) + "[daemon]\nsensor_timeout_s = -1\n")
                 .find("daemon.sensor_timeout_s"),
             std::string::npos);
-  EXPECT_NE(config_error(std::string(kMinimal) + "[bench]\n").find("test.toml:"),
+  EXPECT_NE(config_error(std::string(kMinimalConfig) + "[bench]\n").find("test.toml:"),
             std::string::npos);
   EXPECT_NE(config_error("[source]\nkind = \"gpio\"\n[gpio]\n[bench]\n").find("'modbus_rtu'"),
             std::string::npos);
   EXPECT_NE(config_error("[source]\nkind = \"replay\"\n[bench]\n").find("source.file"),
             std::string::npos);
-  EXPECT_NE(config_error(std::string(kMinimal) + "[modbus_tcp]\nwrite_allow = [\"10.0.0\"]\n")
+  EXPECT_NE(config_error(std::string(kMinimalConfig) + "[modbus_tcp]\nwrite_allow = [\"10.0.0\"]\n")
                 .find("modbus_tcp.write_allow"),
             std::string::npos);
-  EXPECT_NE(config_error(std::string(kMinimal) + "[pipeline]\nmethods = [\"svm\"]\n")
+  EXPECT_NE(config_error(std::string(kMinimalConfig) + "[pipeline]\nmethods = [\"svm\"]\n")
                 .find("pipeline.methods"),
             std::string::npos);
-  EXPECT_NE(config_error(std::string(kMinimal) + "[store]\nretention_days = 0\n")
+  EXPECT_NE(config_error(std::string(kMinimalConfig) + "[store]\nretention_days = 0\n")
                 .find("store.retention_days"),
             std::string::npos);
 }

@@ -25,6 +25,7 @@
 using namespace brakefit;
 using namespace brakefit::daemon;
 using brakefit::test::make_event;
+using brakefit::test::make_test_record;
 using brakefit::test::raw_connect;
 using brakefit::test::raw_recv;
 using brakefit::test::TempDir;
@@ -35,14 +36,9 @@ namespace {
 std::vector<ConnectionView> conns(const std::vector<std::pair<std::string, int>>& ip_idle_s) {
   const auto now = Clock::now();
   std::vector<ConnectionView> v;
+  v.reserve(ip_idle_s.size());
   for (const auto& [ip, idle] : ip_idle_s) v.push_back({ip, now - std::chrono::seconds(idle)});
   return v;
-}
-
-EventRecord record(int id, std::size_t n = 50) {
-  const auto e = make_event(id, n);
-  return make_record(e, event_json(e, "test", nullptr).dump(), "[bench]\n", "V1", "test",
-                     "sha256:abcdef0123", 1000 + id);
 }
 
 }  // namespace
@@ -79,6 +75,7 @@ TEST(ModbusServer, AHostHoldingEveryConnectionItMayDoesNotLockOthersOut) {
   ModbusServer srv(c);
   srv.start();
   std::vector<int> hog;
+  hog.reserve(12);
   for (int i = 0; i < 12; ++i) hog.push_back(raw_connect(srv.port(), "127.0.0.1"));
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   // A new host: connected, asked, answered within 100 ms.
@@ -109,6 +106,7 @@ TEST(ModbusServer, OneAddressIsLimitedAndTheRejectionsAreInARegister) {
   ModbusServer srv(c);
   srv.start();
   std::vector<int> fds;
+  fds.reserve(5);
   for (int i = 0; i < 5; ++i) fds.push_back(raw_connect(srv.port(), "127.0.0.1"));
   // The server refuses the 4th and 5th when its loop accepts them, which can be after it has
   // answered the first client (a race the test once lost under load): wait for both refusals.
@@ -164,7 +162,7 @@ TEST(Store, ASystemReasonIsNamedNotJustUnableToOpen) {
 }
 
 TEST(Store, ARecordRoundTripsThroughItsSpillFormat) {
-  const EventRecord r = record(3, 40);
+  const EventRecord r = make_test_record(3, 40);
   const EventRecord back = record_from_cbor(record_to_cbor(r), "x.cbor");
   EXPECT_EQ(back.result_json, r.result_json);
   EXPECT_EQ(back.samples_blob, r.samples_blob);
@@ -190,13 +188,13 @@ TEST(Store, LastAndFindSeeWhatWasCommitted) {
   c.min_free_mb = 0;
   EventStore s(c, false);
   EXPECT_FALSE(s.last());
-  const auto r1 = record(1), r2 = record(2);
+  const auto r1 = make_test_record(1), r2 = make_test_record(2);
   EXPECT_EQ(s.commit(r1), 1);
   EXPECT_EQ(s.commit(r2), 2);
   EXPECT_EQ(s.last()->id, 2);
   EXPECT_EQ(s.find(r1), 1);
-  EXPECT_FALSE(s.find(record(1)));  // the same event made again is another record
-  EXPECT_NE(record(1).uid, record(1).uid);
+  EXPECT_FALSE(s.find(make_test_record(1)));  // the same event made again is another record
+  EXPECT_NE(make_test_record(1).uid, make_test_record(1).uid);
 }
 
 TEST(Store, AStoreMadeBeforeTheUidColumnGetsIt) {
@@ -222,7 +220,7 @@ TEST(Store, AStoreMadeBeforeTheUidColumnGetsIt) {
   c.path = path;
   c.min_free_mb = 0;
   EventStore s(c, false);
-  const auto r = record(2);
+  const auto r = make_test_record(2);
   EXPECT_EQ(s.commit(r), 2);
   EXPECT_EQ(s.find(r), 2);
   EXPECT_EQ(s.count(), 2);
@@ -238,12 +236,12 @@ TEST(Store, ALockHeldByAnotherConnectionFailsTheCommitQuicklyAndItSucceedsAfter)
   ASSERT_EQ(sqlite3_open(c.path.c_str(), &other), SQLITE_OK);
   ASSERT_EQ(sqlite3_exec(other, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
   const auto t0 = Clock::now();
-  EXPECT_FALSE(s.commit(record(1)));
+  EXPECT_FALSE(s.commit(make_test_record(1)));
   EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), 1.0);
   EXPECT_NE(s.error().find("locked"), std::string::npos) << s.error();
   sqlite3_exec(other, "COMMIT", nullptr, nullptr, nullptr);
   sqlite3_close(other);
-  EXPECT_EQ(s.commit(record(1)), 1);
+  EXPECT_EQ(s.commit(make_test_record(1)), 1);
 }
 
 TEST(Pending, SpillsInOrderAndARestartFindsThemOldestFirst) {
@@ -251,11 +249,11 @@ TEST(Pending, SpillsInOrderAndARestartFindsThemOldestFirst) {
   const std::string dir = (tmp.p / "e.db.spill").string();
   {
     PendingEvents p(dir, 1, 8);
-    p.push(record(1), "");
-    p.push(record(2), "");
+    p.push(make_test_record(1), "");
+    p.push(make_test_record(2), "");
     EXPECT_EQ(p.spilled(), 0u);  // held until the store fails
     p.spill_excess();            // over hold_in_memory 1: record 1 is spilled
-    p.push(record(3), "");
+    p.push(make_test_record(3), "");
     p.spill_excess();  // record 2 spilled
     EXPECT_EQ(p.size(), 3u);
     EXPECT_EQ(p.spilled(), 2u);
@@ -286,7 +284,7 @@ TEST(Pending, WhenSpillingFailsTooEventsBeyondTheCapAreCountedLost) {
   std::ofstream(tmp.p / "file") << "x";
   PendingEvents p((tmp.p / "file" / "spill").string(), 0, 2);  // cannot create a directory there
   for (int i = 1; i <= 5; ++i) {
-    p.push(record(i), "");
+    p.push(make_test_record(i), "");
     p.spill_excess();
   }
   EXPECT_EQ(p.size(), 2u);

@@ -15,6 +15,7 @@
 #include "core/event_json.hpp"
 #include "core/exit_codes.hpp"
 #include "daemon/admission.hpp"
+#include "daemon/config.hpp"
 #include "daemon/instance_lock.hpp"
 #include "daemon/pending.hpp"
 #include "daemon/store.hpp"
@@ -23,17 +24,14 @@
 
 using namespace brakefit;
 using namespace brakefit::daemon;
+using brakefit::test::config_error;
+using brakefit::test::kMinimalConfig;
 using brakefit::test::make_event;
+using brakefit::test::make_test_record;
 using brakefit::test::TempDir;
 namespace fs = std::filesystem;
 
 namespace {
-
-EventRecord record(int id, std::size_t n = 50) {
-  const auto e = make_event(id, n);
-  return make_record(e, event_json(e, "test", nullptr).dump(), "[bench]\n", "V1", "test",
-                     "sha256:abcdef0123", 1000 + id);
-}
 
 std::size_t count_ext(const fs::path& dir, const std::string& ext) {
   std::size_t n = 0;
@@ -60,8 +58,10 @@ void wal_with_commits(const fs::path& dir, int n) {
   const std::string live = (dir / "live.db").string();
   sqlite3* h = nullptr;
   ASSERT_EQ(sqlite3_open(live.c_str(), &h), SQLITE_OK);
-  sqlite3_exec(h, "PRAGMA journal_mode=WAL; PRAGMA wal_autocheckpoint=0;"
-               "CREATE TABLE other (id INTEGER PRIMARY KEY, x BLOB)", nullptr, nullptr, nullptr);
+  sqlite3_exec(h,
+               "PRAGMA journal_mode=WAL; PRAGMA wal_autocheckpoint=0;"
+               "CREATE TABLE other (id INTEGER PRIMARY KEY, x BLOB)",
+               nullptr, nullptr, nullptr);
   for (int i = 0; i < n; ++i)
     sqlite3_exec(h, "INSERT INTO other (x) VALUES (randomblob(3000))", nullptr, nullptr, nullptr);
   fs::copy_file(live, dir / "crashed.db");
@@ -71,12 +71,31 @@ void wal_with_commits(const fs::path& dir, int n) {
 
 }  // namespace
 
+TEST(Config, TheDurabilityKeysAreCheckedAndNamed) {
+  for (const auto& [text, key] : std::vector<std::pair<std::string, std::string>>{
+           {"[modbus_tcp]\nprotected = [\"station\"]\n", "modbus_tcp.protected"},
+           {"[pipeline]\nmax_event_s = 0.05\n", "pipeline.max_event_s"},
+           {"[pipeline]\nmin_speed_mps = 1\n", "pipeline.min_speed_mps"},
+           {"[pipeline]\nmax_pressure_bar = 1\n", "pipeline.max_pressure_bar"},
+           {"[store]\nspill_dir = 5\n", "store.spill_dir"}})
+    EXPECT_NE(config_error(std::string(kMinimalConfig) + text).find(key), std::string::npos)
+        << text;
+  const Config c = parse_config(std::string(kMinimalConfig) +
+                                    "[modbus_tcp]\nprotected = [\"10.0.0.9\"]\n"
+                                    "[pipeline]\nmax_event_s = 30\n[store]\nspill_dir = \"/j\"\n",
+                                "test.toml");
+  EXPECT_EQ(c.modbus_tcp.protect, std::vector<std::string>{"10.0.0.9"});
+  EXPECT_DOUBLE_EQ(c.pipeline.events.max_event_s, 30.0);
+  EXPECT_EQ(c.store.spill_dir, "/j");
+  EXPECT_TRUE(c.pipeline.defer_fit);
+}
+
 TEST(Journal, TwoWritersOnOneDirectoryNeverOverwriteEachOthersFiles) {
   TempDir tmp;
   const std::string dir = (tmp.p / "e.db.spill").string();
   PendingEvents a(dir, 0, 8), b(dir, 0, 8);  // both start at sequence 1
-  const auto pa = a.journal(record(1));
-  const auto pb = b.journal(record(2));
+  const auto pa = a.journal(make_test_record(1));
+  const auto pb = b.journal(make_test_record(2));
   ASSERT_FALSE(pa.empty());
   ASSERT_FALSE(pb.empty());
   EXPECT_NE(pa, pb);
@@ -108,7 +127,7 @@ TEST(Journal, AJournaledEventIsOnDiskBeforeItIsFittedAndGoesOnlyWithItsCommit) {
     EXPECT_EQ(e.samples.size(), 60u);
     EXPECT_EQ(e.end_reason, "switch_off_slip");
   }
-  EventRecord done = record(7, 60);
+  EventRecord done = make_test_record(7, 60);
   done.uid = unfitted.uid;
   p.push(done, path);
   EXPECT_EQ(p.spilled(), 1u);
@@ -128,8 +147,9 @@ TEST(SpillFiles, CraftedFilesAreRefusedWithoutCrashHangOrGrowthAndNeverStrandThe
   fs::create_symlink("/dev/zero", dir / "00000000000000000003-zero.cbor");
   std::ofstream(dir / "00000000000000000004-text.cbor") << "not cbor";
   PendingEvents writer(dir.string(), 0, 8);
-  for (int i = 0; i < 4; ++i) writer.journal(record(100));  // sequence 1-4 too: sorted after
-  const auto valid = writer.journal(record(42));
+  for (int i = 0; i < 4; ++i)
+    writer.journal(make_test_record(100));  // sequence 1-4 too: sorted after
+  const auto valid = writer.journal(make_test_record(42));
   ASSERT_FALSE(valid.empty());
 
   PendingEvents p(dir.string(), 0, 8);
@@ -153,7 +173,7 @@ TEST(SpillFiles, CraftedFilesAreRefusedWithoutCrashHangOrGrowthAndNeverStrandThe
 TEST(SpillFiles, AFileBeyondTheSizeBoundIsNotRead) {
   TempDir tmp;
   PendingEvents p((tmp.p / "s").string(), 0, 8);
-  const auto path = p.journal(record(1));
+  const auto path = p.journal(make_test_record(1));
   const auto size = fs::file_size(path);
   EXPECT_EQ(read_spill_file(path, size).pipeline_event_id, 1);
   try {
@@ -214,7 +234,7 @@ TEST(Wal, EveryCommitReachesTheMainFile) {
   c.path = (tmp.p / "e.db").string();
   c.min_free_mb = 0;
   EventStore s(c, false);
-  for (int i = 1; i <= 3; ++i) ASSERT_TRUE(s.commit(record(i)));
+  for (int i = 1; i <= 3; ++i) ASSERT_TRUE(s.commit(make_test_record(i)));
   // A copy of the main file alone (a backup that forgot -wal) holds all three.
   fs::copy_file(c.path, tmp.p / "backup.db");
   EXPECT_EQ(rows((tmp.p / "backup.db").string()), 3);
