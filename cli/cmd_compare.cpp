@@ -164,7 +164,7 @@ void add_compare_command(CLI::App& app) {
     auto name = [](const std::string& p) { return std::filesystem::path(p).filename().string(); };
     auto runs_label = [](const char* what, const std::vector<std::string>& v) {
       return v.size() == 1 ? std::filesystem::path(v[0]).filename().string()
-                           : fmt::format("{} ({} runs)", what, v.size());
+                           : fmt::format("{} ({})", what, count(v.size(), "run"));
     };
     const Side a =
         positional ? load_side({o->a}, name(o->a), o->run, model, method)

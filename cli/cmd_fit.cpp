@@ -109,9 +109,10 @@ void add_fit_command(CLI::App& app) {
       std::cout << fmt::format("  {:<7} {:>10} {:>7} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9}  {}\n",
                                "method", pct ? "B [1/%]" : "B [1/-]", "C", "D [N]", "E", "MAPE %",
                                "RMSE N", "peak N", pct ? "peak %" : "peak [-]", "notes");
-      for (const auto& r : all[i]) {
+      for (std::size_t m = 0; m < all[i].size(); ++m) {
+        const auto& r = all[i][m];
         const MfPeak pk = mf_peak(r.params, 1.0);
-        const std::string notes = result_notes(r);
+        const std::string notes = result_notes(all[i], m);
         std::cout << fmt::format(
             "  {:<7} {:>10.4f} {:>7.4f} {:>9.1f} {:>8.4f} {:>8.3f} {:>8.2f} {:>9.1f} {:>9.4f}  "
             "{}\n",

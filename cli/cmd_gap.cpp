@@ -36,6 +36,7 @@ nlohmann::ordered_json params_json(const gap::Fit& f, const std::vector<gap::Eff
 }
 
 nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::Run>& runs,
+                                   const std::vector<gap::Run>& roller_runs,
                                    const std::vector<LeftOut>& left_out,
                                    const std::string& model_hash, const std::string& mode,
                                    gap::Condition condition, const gap::Options& gates) {
@@ -52,6 +53,10 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
                 {"min_gap_over_floor", num(gates.min_gap_over_floor)}};
   j["runs"] = nlohmann::ordered_json::array();
   for (const auto& run : runs) j["runs"].push_back(run.name);
+  if (mode == "roller_vs_road") {  // "runs" are the road's, checked against the roller's fit
+    j["roller_runs"] = nlohmann::ordered_json::array();
+    for (const auto& run : roller_runs) j["roller_runs"].push_back(run.name);
+  }
   j["left_out"] = left_out_json(left_out);
   j["verdict"] = r.verdict;
   j["effects"] = nlohmann::ordered_json::array();
@@ -187,7 +192,7 @@ void write_report(const std::string& dir, const gap::Report& r, const std::vecto
 td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}td:first-child{{text-align:left}}
 tr.ok{{background:#e6f4e6}}</style></head><body>
 <h1>Sim-to-real gap: {}</h1>
-<p>Runs: {}</p>
+<p>{}</p>
 <h2>Verdict: {}</h2>
 <p>Held-out gap (leave one run out): <b>{:.1f} N</b> before, <b>{:.1f} N</b> after ({:.0f} % explained);
 noise floor {:.1f} N (force channel {:.1f} N, slip noise through the slope {:.1f} N). Condition <b>{}</b>: an effect is accepted when its held-out gain is at
@@ -208,7 +213,12 @@ condition).</p>
       doc["mode"] == "roller_vs_road" ? "the roller fit predicting the road runs"
                                       : "model vs measurement",
       plot::xml_escape(
-          fmt::format("{}", fmt::join(doc["runs"].get<std::vector<std::string>>(), ", "))),
+          doc.contains("roller_runs")
+              ? fmt::format("Roller runs (fitted): {}. Road runs (predicted): {}.",
+                            fmt::join(doc["roller_runs"].get<std::vector<std::string>>(), ", "),
+                            fmt::join(doc["runs"].get<std::vector<std::string>>(), ", "))
+              : fmt::format("Runs: {}.",
+                            fmt::join(doc["runs"].get<std::vector<std::string>>(), ", "))),
       plot::xml_escape(fmt::format("{}", fmt::join(r.verdict, ", "))), r.gap_before_rmse_n,
       r.gap_after_rmse_n,
       r.gap_before_rmse_n > 0 ? 100 * (1 - r.gap_after_rmse_n / r.gap_before_rmse_n) : 0.0,
@@ -298,14 +308,20 @@ void add_gap_command(CLI::App& app) {
     std::vector<gap::Run> roller_runs;
     std::vector<gap::Run> runs = transfer ? load(o->road, false) : load(o->files, true);
     if (transfer) roller_runs = load(o->roller, true);
+    if (!transfer && runs.size() < 2)
+      // One file with one event is a usage slip; files whose events were left out are data.
+      throw ExitError(o->files.size() < 2 ? kExitUsage : kExitDataError,
+                      fmt::format("gap: {} usable in {}: the diagnosis needs at least two runs "
+                                  "(it checks every effect on a run it was not fitted to)",
+                                  count(runs.size(), "run"), count(o->files.size(), "file")));
     if (transfer)
       spdlog::info(
-          "gap: {} runs ({} roller, {} road), seeding the baseline with the hybrid fit of "
+          "gap: {} ({} roller, {} road), seeding the baseline with the hybrid fit of "
           "the pooled roller points",
-          roller_runs.size() + runs.size(), roller_runs.size(), runs.size());
+          count(roller_runs.size() + runs.size(), "run"), roller_runs.size(), runs.size());
     else
-      spdlog::info("gap: {} runs, seeding the baseline with the hybrid fit of the pooled points",
-                   runs.size());
+      spdlog::info("gap: {}, seeding the baseline with the hybrid fit of the pooled points",
+                   count(runs.size(), "run"));
     const MethodResult seed = run_method(Method::Hybrid, &model, pooled, fit_options_for(&model));
     // The gates calibrated on null data of this condition (runs from one bench in mode 1).
     gap::Condition condition = gap::Condition::RollerToRoad;
@@ -334,7 +350,7 @@ void add_gap_command(CLI::App& app) {
         transfer ? gap::diagnose_transfer(roller_runs, runs, seed.params, gap_options)
                  : gap::diagnose(runs, seed.params, gap_options);
     const auto doc =
-        report_json(rep, runs, left_out, model.hash,
+        report_json(rep, runs, roller_runs, left_out, model.hash,
                     transfer ? "roller_vs_road" : "model_vs_measurement", condition, gap_options);
     if (!o->report.empty()) {
       write_report(o->report, rep, runs, doc);

@@ -87,8 +87,9 @@ void add_replay_command(CLI::App& app) {
             100 * e.curve.max_slip_ratio(), e.event.end_reason,
             e.event.flags.empty() ? ""
                                   : fmt::format(" [flags: {}]", fmt::join(e.event.flags, ", ")));
-        for (const auto& r : e.results) {
-          const std::string notes = result_notes(r);
+        for (std::size_t m = 0; m < e.results.size(); ++m) {
+          const auto& r = e.results[m];
+          const std::string notes = result_notes(e.results, m);
           std::cout << fmt::format(
               "  {:<7} B {:>8.3f} C {:>6.4f} D {:>8.1f} E {:>8.4f}  MAPE {:>6.2f} %  RMSE {:>7.1f} "
               "N{}\n",

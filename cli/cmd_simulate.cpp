@@ -21,9 +21,8 @@ void add_simulate_command(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand(
       "simulate", "Simulate a roller or flat-ground brake test and record it as a candump log");
-  cmd->add_option("scenario", o->scenario, "scenario TOML (sim/scenarios/)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  // No CLI::ExistingFile: a missing scenario is a missing input (66), not a usage error.
+  cmd->add_option("scenario", o->scenario, "scenario TOML (sim/scenarios/)")->required();
   cmd->add_option("--out", o->out,
                   "candump log to write; <stem>.bench.toml and <stem>.truth.json go beside it")
       ->required();
@@ -47,6 +46,7 @@ void add_simulate_command(CLI::App& app) {
     if (o->seed >= 0) sc.seed = static_cast<std::uint64_t>(o->seed);
     if (o->tyre_pressure_bar > 0) sc.tyre_pressure_bar = o->tyre_pressure_bar;
     const sim::SimResult r = sim::simulate(sc);
+    make_parent_dir(o->out);
     drivers::write_candump_file(o->out, r.frames);
     const std::string stem = recording_stem(o->out);
     write_file(stem + ".bench.toml", pipeline::format_calibration(r.calibration));

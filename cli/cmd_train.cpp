@@ -18,8 +18,7 @@ void add_train_command(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("train", "Generate the curve database and train the SOM and the MLP");
   cmd->add_option("--config", opts->config,
-                  "training configuration (TOML); default: built-in settings")
-      ->check(CLI::ExistingFile);
+                  "training configuration (TOML); default: built-in settings");
   cmd->add_option("--out", opts->out, "model file to write")->required();
   cmd->callback([opts] {
     TrainConfig cfg;

@@ -17,6 +17,11 @@
 namespace brakefit::cli {
 
 std::string read_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw ExitError(
+        kExitNoInput,
+        fmt::format("{}: is a directory; give the files in it (for example {}/*.csv)", path, path));
   std::ifstream in(path, std::ios::binary);
   if (!in)
     throw ExitError(kExitNoInput, fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
@@ -26,8 +31,20 @@ std::string read_file(const std::string& path) {
   return ss.str();
 }
 
+std::string count(std::size_t n, const std::string& noun) {
+  return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s");
+}
+
+void make_parent_dir(const std::string& path) {
+  const auto parent = std::filesystem::path(path).parent_path();
+  std::error_code ec;
+  if (!parent.empty() && !std::filesystem::exists(parent, ec))
+    std::filesystem::create_directories(parent, ec);  // a failure is named by the write after
+}
+
 void write_file(const std::string& path, const std::string& content) {
   const std::string tmp = path + ".tmp";
+  make_parent_dir(path);
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out)

@@ -17,8 +17,13 @@ using brakefit::kExitNoInput;
 using brakefit::kExitUsage;
 
 std::string read_file(const std::string& path);
+/// "1 run", "3 runs": a count with its noun.
+std::string count(std::size_t n, const std::string& noun);
 /// Writes via a temporary file and rename, so a reader never sees half a file.
 void write_file(const std::string& path, const std::string& content);
+/// Creates the directory an output goes in when it does not exist yet (out/fit.svg on a fresh
+/// clone); an output under a file still fails at its write, naming the path.
+void make_parent_dir(const std::string& path);
 /// Creates an output directory (and its parents); ExitError 73 naming it and the system's reason.
 void make_output_dir(const std::string& dir);
 /// The model given, else $BRAKEFIT_MODEL, else the installed default model

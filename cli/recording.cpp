@@ -13,6 +13,25 @@
 
 namespace brakefit::cli {
 
+namespace {
+
+/// The first line that is not blank or a comment is a curve CSV's header.
+bool looks_like_curve_csv(std::string_view text) {
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    auto nl = text.find('\n', pos);
+    if (nl == std::string_view::npos) nl = text.size();
+    std::string_view line = text.substr(pos, nl - pos);
+    pos = nl + 1;
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
+    if (line.empty() || line.front() == '#') continue;
+    return line.rfind("slip,", 0) == 0 || line.rfind("slip_pct,", 0) == 0;
+  }
+  return false;
+}
+
+}  // namespace
+
 Run process_run(const std::string& path, const RunOptions& o, const Model* model) {
   Run run;
   run.path = path;
@@ -34,6 +53,11 @@ Run process_run(const std::string& path, const RunOptions& o, const Model* model
     run.events = std::move(p.events());
     return run;
   }
+  if (looks_like_curve_csv(text))
+    throw InputError(path +
+                     ": a curve CSV (slip, force_n), not a recording or an event file: fit it "
+                     "with `brakefit fit " +
+                     path + "`");
   std::string bench = o.bench_file;
   if (bench.empty()) {
     bench = recording_stem(path) + ".bench.toml";

@@ -1,7 +1,12 @@
 #include "core/event_json.hpp"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "brakefit/version.hpp"
 
@@ -64,6 +69,23 @@ std::string result_notes(const MethodResult& r) {
   for (const auto& b : r.at_bound) out += (out.empty() ? "" : ", ") + b;
   if (!out.empty()) out += " at bound";
   if (peak_beyond_data(r)) out += (out.empty() ? "" : "; ") + std::string("peak beyond the data");
+  return out;
+}
+
+std::string result_notes(const std::vector<MethodResult>& results, std::size_t i) {
+  auto same = [](double a, double b) {
+    return std::abs(a - b) <= 1e-6 * std::max(1.0, std::abs(a));
+  };
+  std::string out = result_notes(results[i]);
+  const MfParams& p = results[i].params;
+  std::vector<std::string> alike;
+  for (std::size_t j = 0; j < results.size(); ++j) {
+    const MfParams& q = results[j].params;
+    if (j != i && same(p.B, q.B) && same(p.C, q.C) && same(p.D, q.D) && same(p.E, q.E))
+      alike.push_back(to_string(results[j].method));
+  }
+  if (!alike.empty())
+    out += fmt::format("{}the same curve as {}", out.empty() ? "" : "; ", fmt::join(alike, ", "));
   return out;
 }
 

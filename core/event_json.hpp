@@ -16,6 +16,9 @@ bool peak_beyond_data(const MethodResult& r);
 /// What a table or a legend must say beside a fit: "C at bound" for parameters that ended on a
 /// bound, "peak beyond the data" when peak_beyond_data. Empty when there is nothing to say.
 std::string result_notes(const MethodResult& r);
+/// The notes of results[i], and the methods whose curve is the same (B, C, D, E within 1e-6): a
+/// least-squares fit and the hybrid often end on one optimum, and one line hides the other.
+std::string result_notes(const std::vector<MethodResult>& results, std::size_t i);
 /// {"schema":"brakefit.event/1", "version", "model_hash", "file", "event_id", "bench", ...}.
 nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::string& file,
                                   const Model* model);

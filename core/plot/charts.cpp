@@ -20,7 +20,7 @@ std::string fit_chart_svg(const std::string& title, const Curve& measured,
   const double smax = measured.max_slip_ratio();
   for (std::size_t i = 0; i < results.size(); ++i) {
     const auto& r = results[i];
-    const std::string notes = result_notes(r);
+    const std::string notes = result_notes(results, i);
     Series s{fmt::format("{} (MAPE {:.2f} %{})", to_string(r.method), r.metrics.mape_pct,
                          notes.empty() ? "" : "; " + notes),
              {},

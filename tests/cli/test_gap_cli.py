@@ -133,9 +133,19 @@ class Gap(unittest.TestCase):
             self.assertEqual(len(svg_series(os.path.join(d, "residual.svg"))[1]), 3)
 
     def test_one_run_is_not_enough(self):
+        # One file with one event: a usage slip (64); two files, one of them without a usable
+        # event: the data (65).
         r = run("gap", os.path.join(REC, "roller_2p2bar_fast.log"))
-        self.assertEqual(r.returncode, 65)
+        self.assertEqual(r.returncode, 64)
         self.assertIn("at least two runs", r.stderr)
+        with tempfile.TemporaryDirectory() as d:
+            empty = os.path.join(d, "quiet.log")
+            with open(empty, "w") as f:
+                f.write("(1700000000.000000) can0 7FF#00\n")
+            r = run("gap", "--bench", os.path.join(REC, "roller_2p2bar_fast.bench.toml"),
+                    os.path.join(REC, "roller_2p2bar_fast.log"), empty)
+            self.assertEqual(r.returncode, 65, r.stderr)
+            self.assertIn("1 run usable in 2 files", r.stderr)
 
     def test_runs_of_two_benches_are_refused_in_mode_1(self):
         r = run("gap", os.path.join(REC, "roller_2p2bar_fast.log"),
