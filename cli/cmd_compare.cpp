@@ -28,7 +28,9 @@ struct Side {
   std::array<double, 4> spread{};  ///< standard deviation of the per-event fits (NaN for one event)
   double rmse_n = 0.0;
   double peak_force_n = 0.0, peak_slip_ratio = 0.0;
-  std::vector<LeftOut> left_out;  ///< events not used, with the reason
+  std::vector<LeftOut> left_out;                   ///< events not used, with the reason
+  double wheel_load_n = NAN;                       ///< the first run's calibration
+  std::vector<std::string> at_bound, implausible;  ///< of the pooled fit
 };
 
 std::vector<std::string> expand(const std::string& p) {
@@ -54,6 +56,7 @@ Side load_side(const std::vector<std::string>& paths, const std::string& label,
   }
   for (const auto& f : s.files) {
     Run run = process_run(f, ro, &model);
+    if (std::isnan(s.wheel_load_n)) s.wheel_load_n = run.calibration.wheel_load_n;
     leave_out_if_empty(s.left_out, run);
     for (auto& e : run.events) {
       if (!e.event.fittable()) leave_out(s.left_out, run, e.event, flagged_reason(e.event));
@@ -77,6 +80,8 @@ Side load_side(const std::vector<std::string>& paths, const std::string& label,
   const MethodResult all = run_method(method, &model, pooled, fit_options_for(&model));
   s.mean = all.params;
   s.rmse_n = all.metrics.rmse_n;
+  s.at_bound = all.at_bound;
+  s.implausible = implausible_curve(all.params, s.wheel_load_n);
   for (std::size_t k = 0; k < 4; ++k) s.uncertainty[k] = all.stderr_ ? (*all.stderr_)[k] : NAN;
   const double n = static_cast<double>(s.fits.size());
   std::array<double, 4> sum{}, sq{};
@@ -112,6 +117,8 @@ nlohmann::ordered_json side_json(const Side& s) {
                              {"C", num(s.spread[1])},
                              {"D", num(s.spread[2])},
                              {"E", num(s.spread[3])}};
+  j["at_bound"] = s.at_bound;
+  j["implausible"] = s.implausible;
   j["rmse_n"] = num(s.rmse_n);
   j["peak_force_n"] = num(s.peak_force_n);
   j["peak_slip_ratio"] = num(s.peak_slip_ratio);
@@ -243,16 +250,21 @@ void add_compare_command(CLI::App& app) {
         "[spread] = std of the per-event fits)\n",
         o->method);
     std::cout << fmt::format("  {:<22} {:>24} {:>24} {:>8}\n", "parameter",
-                             a.label + fmt::format(" ({})", a.fits.size()),
-                             b.label + fmt::format(" ({})", b.fits.size()), "B/A");
+                             a.label + ": " + count(a.fits.size(), "event"),
+                             b.label + ": " + count(b.fits.size(), "event"), "B/A");
     const char* names[4] = {"B [1/-]", "C", "D [N]", "E"};
     const double va[4] = {a.mean.B, a.mean.C, a.mean.D, a.mean.E},
                  vb[4] = {b.mean.B, b.mean.C, b.mean.D, b.mean.E};
     const int prec[4] = {3, 4, 1, 4};  // NOLINT
+    const char* keys[4] = {"B", "C", "D", "E"};
+    auto bound = [&](const Side& side, std::size_t k, std::string text) {
+      const auto& ab = side.at_bound;
+      return std::find(ab.begin(), ab.end(), keys[k]) == ab.end() ? text : text + " (at bound)";
+    };
     for (std::size_t k = 0; k < 4; ++k) {
       std::cout << fmt::format("  {:<22} {:>24} {:>24} {:>8.3f}\n", names[k],
-                               cell(va[k], a.uncertainty[k], prec[k]),
-                               cell(vb[k], b.uncertainty[k], prec[k]), vb[k] / va[k]);
+                               bound(a, k, cell(va[k], a.uncertainty[k], prec[k])),
+                               bound(b, k, cell(vb[k], b.uncertainty[k], prec[k])), vb[k] / va[k]);
       if (std::isfinite(a.spread[k]) || std::isfinite(b.spread[k]))
         std::cout << fmt::format("  {:<22} {:>24} {:>24}\n", "",
                                  fmt::format("[{:.{}f}]", a.spread[k], prec[k]),
@@ -267,6 +279,10 @@ void add_compare_command(CLI::App& app) {
     std::cout << fmt::format("  {:<22} {:>24.2f} {:>24.2f} {:>8.3f}\n", "slip at peak [%]",
                              100 * a.peak_slip_ratio, 100 * b.peak_slip_ratio,
                              b.peak_slip_ratio / a.peak_slip_ratio);
+    for (const Side* side : {&a, &b})
+      if (!side->implausible.empty())
+        std::cout << fmt::format("  {}: NOT A TYRE'S CURVE: {}\n", side->label,
+                                 fmt::join(side->implausible, "; "));
   });
 }
 

@@ -1,6 +1,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -75,8 +76,11 @@ void add_fit_command(CLI::App& app) {
       spdlog::debug("fitting {} ({} points)", o->files[i], curves[i].curve.size());
       std::vector<MethodResult> rs;
       rs.reserve(methods.size());
-      for (Method m : methods)
+      for (Method m : methods) {
         rs.push_back(run_method(m, model ? &*model : nullptr, curves[i].curve, fit_opts));
+        // A curve file carries no wheel load: its shape alone is judged.
+        rs.back().implausible = implausible_curve(rs.back().params, std::nan(""));
+      }
       all.push_back(std::move(rs));
     }
     for (std::size_t i = 0; i < curves.size(); ++i) {

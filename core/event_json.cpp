@@ -42,6 +42,7 @@ nlohmann::ordered_json result_json(const MethodResult& r) {
   j["peak_reached"] = r.peak_reached;
   j["peak_beyond_data"] = beyond(r.peak_reached, pk);
   j["at_bound"] = r.at_bound;
+  j["implausible"] = r.implausible;  // why these cannot be a tyre's curve; empty: plausible
   if (r.stderr_) {
     const auto& s = *r.stderr_;
     j["stderr"] = {{"B", num(s[0])}, {"C", num(s[1])}, {"D", num(s[2])}, {"E", num(s[3])}};
@@ -69,6 +70,9 @@ std::string result_notes(const MethodResult& r) {
   for (const auto& b : r.at_bound) out += (out.empty() ? "" : ", ") + b;
   if (!out.empty()) out += " at bound";
   if (peak_beyond_data(r)) out += (out.empty() ? "" : "; ") + std::string("peak beyond the data");
+  if (!r.implausible.empty())
+    out += fmt::format("{}NOT A TYRE'S CURVE: {}", out.empty() ? "" : "; ",
+                       fmt::join(r.implausible, "; "));
   return out;
 }
 

@@ -1,9 +1,27 @@
 #include "core/identify.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <future>
 
 namespace brakefit {
+
+std::vector<std::string> implausible_curve(const MfParams& p, double wheel_load_n,
+                                           const TyreLimits& l) {
+  std::vector<std::string> why;
+  if (!(p.C >= l.min_C && p.C <= l.max_C))
+    why.push_back(fmt::format("shape factor C {:.4g} outside [{:g}, {:g}]", p.C, l.min_C, l.max_C));
+  if (std::isfinite(wheel_load_n) && wheel_load_n > 0) {
+    const double mu = mf_peak(p, 1.0).force_n / wheel_load_n;
+    if (!(mu >= l.min_peak_friction && mu <= l.max_peak_friction))
+      why.push_back(
+          fmt::format("peak friction {:.2f} (peak force / wheel load {:.0f} N) outside "
+                      "[{:g}, {:g}]",
+                      mu, wheel_load_n, l.min_peak_friction, l.max_peak_friction));
+  }
+  return why;
+}
 
 const char* to_string(Method m) {
   switch (m) {

@@ -45,7 +45,22 @@ struct MethodResult {
   std::array<std::string, kMfParamCount> stderr_null_reason{};  ///< why a stderr is null
   int iterations = 0;
   bool converged = true;
+  /// Why these parameters cannot be a tyre's curve (empty: nothing found); see implausible_curve.
+  std::vector<std::string> implausible;
 };
+
+/// The limits of what a tyre's longitudinal curve does: its peak friction (the curve's maximum over
+/// slip 0-1 divided by the wheel load) and its shape factor C.
+struct TyreLimits {
+  double min_peak_friction = 0.05;  ///< glare ice
+  double max_peak_friction = 1.6;   ///< soft racing rubber on a dry, clean surface
+  double min_C = 1.0;               ///< below 1 the curve has no peak: not a tyre's shape
+  double max_C = 2.5;
+};
+/// The reasons params cannot describe a tyre (empty when none); the peak friction is judged only
+/// with a finite wheel_load_n.
+std::vector<std::string> implausible_curve(const MfParams& p, double wheel_load_n,
+                                           const TyreLimits& l = {});
 
 /// Peak-normalised shape on the grid (divided by max |value| over the valid points).
 std::vector<double> normalise_shape(const GridCurve& g);

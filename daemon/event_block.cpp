@@ -42,6 +42,7 @@ RegisterWrites event_block(const std::string& result_json, std::int64_t id, bool
     if (f == "aborted") flags |= kFlagAborted;
     if (f == "sensor_fault") flags |= kFlagSensorFault;
     if (f == "edges_lost") flags |= kFlagEdgesLost;
+    if (f == "implausible_data") flags |= kFlagImplausibleData;
   }
   const auto& results = doc.at("results");
   if (results.empty()) flags |= kFlagNotFitted;
@@ -50,6 +51,11 @@ RegisterWrites event_block(const std::string& result_json, std::int64_t id, bool
         !r["at_bound"].empty() && r.contains("method") &&
         (r["method"] == "lm" || r["method"] == "hybrid"))
       flags |= kFlagAtBound;
+  for (const auto& r : results)
+    if (r.is_object() && r.contains("implausible") && r["implausible"].is_array() &&
+        !r["implausible"].empty() && r.contains("method") &&
+        (r["method"] == "lm" || r["method"] == "hybrid"))
+      flags |= kFlagImplausibleResult;
   if (!samples_stored) flags |= kFlagSamplesNotStored;
   const std::uint16_t seq = event_seq(id);
   const auto t_start_ns = doc.at("t_start_ns").get<std::int64_t>();

@@ -67,10 +67,14 @@ std::vector<RegisterDef> build_map() {
        "0 too short, 1 aborted, 2 sensor fault, 3 not fitted, 4 samples not stored, 5 edges lost "
        "(GPIO edges dropped or illegal transitions during the event; still fitted), 6 a "
        "least-squares "
-       "parameter (lm or hybrid) at its bound: set by the bound, not the data (JSON at_bound)"},
+       "parameter (lm or hybrid) at its bound: set by the bound, not the data (JSON at_bound), 7 "
+       "implausible data: a speed or pressure outside physical ranges ended the event (not "
+       "fitted), 8 implausible result: an lm or hybrid curve no tyre gives (peak friction or "
+       "shape; JSON implausible)"},
       {"event.end_reason", T::Input, 105, 1, Y::U16, "",
        "1 switch_off_slip, 2 wheel_lock, 3 release, 4 stopped, 5 sensor_timeout, 6 end_of_data, 7 "
-       "tester_aborted, 8 operator_abort, 9 shutdown, 0 other"},
+       "tester_aborted, 8 operator_abort, 9 shutdown, 10 max_length, 11 implausible_data, 0 "
+       "other"},
       {"event.duration_ms", T::Input, 106, 2, Y::U32, "ms", "event duration"},
       {"event.points", T::Input, 108, 1, Y::U16, "", "slip/force points fitted"},
       {"event.peak_force_n", T::Input, 109, 2, Y::F32, "N", "largest measured brake force"},
@@ -145,9 +149,9 @@ std::string format_register_csv() {
 
 std::uint16_t end_reason_code(const std::string& reason) {
   static const std::map<std::string, std::uint16_t> codes = {
-      {"switch_off_slip", 1}, {"wheel_lock", 2},     {"release", 3},
-      {"stopped", 4},         {"sensor_timeout", 5}, {"end_of_data", 6},
-      {"tester_aborted", 7},  {"operator_abort", 8}, {"shutdown", 9}};
+      {"switch_off_slip", 1}, {"wheel_lock", 2},  {"release", 3},          {"stopped", 4},
+      {"sensor_timeout", 5},  {"end_of_data", 6}, {"tester_aborted", 7},   {"operator_abort", 8},
+      {"shutdown", 9},        {"max_length", 10}, {"implausible_data", 11}};
   auto it = codes.find(reason);
   return it == codes.end() ? 0 : it->second;
 }

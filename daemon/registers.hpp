@@ -49,8 +49,10 @@ enum EventFlagBit : std::uint16_t {
   kFlagSensorFault = 1u << 2,
   kFlagNotFitted = 1u << 3,
   kFlagSamplesNotStored = 1u << 4,
-  kFlagEdgesLost = 1u << 5,  ///< the GPIO reader lost edges during the event (still fitted)
-  kFlagAtBound = 1u << 6,    ///< an lm or hybrid parameter ended on its bound (JSON at_bound)
+  kFlagEdgesLost = 1u << 5,        ///< the GPIO reader lost edges during the event (still fitted)
+  kFlagAtBound = 1u << 6,          ///< an lm or hybrid parameter ended on its bound (JSON at_bound)
+  kFlagImplausibleData = 1u << 7,  ///< a reading outside physical ranges ended the event
+  kFlagImplausibleResult = 1u << 8,  ///< an lm or hybrid curve no tyre gives (JSON implausible)
 };
 /// End reasons (input register "event.end_reason").
 std::uint16_t end_reason_code(const std::string& reason);

@@ -57,6 +57,8 @@ EventResult Pipeline::fit(Event e, const Calibration& c) const {
       for (Method m : methods) r.results.push_back(run_method(m, model_, r.curve, fo));
     }
   }
+  // A result no tyre could give is said with every output of it, never shown as a plain result.
+  for (auto& m : r.results) m.implausible = implausible_curve(m.params, c.wheel_load_n);
   r.event = std::move(e);
   return r;
 }

@@ -65,6 +65,36 @@ class FirstRun(unittest.TestCase):
             self.assertTrue(any(s.startswith("lm ") and "the same curve as hybrid" in s
                                 for s in series), series)
 
+    def test_a_curve_no_tyre_gives_is_flagged_in_the_json_the_table_and_the_plot(self):
+        # The ground recording at 150 bar/s: its least-squares fit ends with C at its bound and a
+        # peak of 6.1 kN on a wheel loaded with 3.8 kN (the truth: 1.05).
+        log = os.path.join(REC, "ground_2p2bar_150barps.log")
+        r = run("replay", "--json", log)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        by = {x["method"]: x for x in json.loads(r.stdout.splitlines()[0])["results"]}
+        for m in ("lm", "hybrid"):
+            self.assertTrue(any("peak friction" in w for w in by[m]["implausible"]), by[m])
+            self.assertTrue(any("shape factor C" in w for w in by[m]["implausible"]), by[m])
+        table = run("replay", log).stdout
+        self.assertIn("NOT A TYRE'S CURVE: shape factor C 0.3", table)
+        with tempfile.TemporaryDirectory() as d:
+            self.assertEqual(run("replay", "--report", d, log).returncode, 0)
+            _, series = svg_series(sorted(glob.glob(os.path.join(d, "*.svg")))[0])
+            self.assertTrue(any(s.startswith("hybrid ") and "NOT A TYRE'S CURVE" in s
+                                for s in series), series)
+        # compare's table says which parameters the bound set and which side is no tyre's curve.
+        roller = sorted(glob.glob(os.path.join(REC, "roller_2p2bar_*.log")))
+        road = sorted(glob.glob(os.path.join(REC, "ground_2p2bar_*.log")))
+        r = run("compare", "--roller", *roller, "--road", *road)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("0.3000 (at bound)", r.stdout)
+        self.assertIn("road (3 runs): NOT A TYRE'S CURVE: shape factor C 0.3", r.stdout)
+        self.assertIn("roller (3 runs): 3 events", r.stdout)
+        # A roller recording whose fits are a tyre's carries no such flag.
+        r = run("replay", "--json", os.path.join(REC, "roller_2p2bar_medium.log"))
+        res = json.loads(r.stdout.splitlines()[0])["results"]
+        self.assertEqual([x["implausible"] for x in res], [[], [], [], []])
+
     def test_the_roller_vs_road_report_names_both_sides_runs(self):
         roller = sorted(glob.glob(os.path.join(REC, "roller_2p2bar_*.log")))
         road = sorted(glob.glob(os.path.join(REC, "ground_2p2bar_*.log")))

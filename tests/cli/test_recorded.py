@@ -245,7 +245,7 @@ class FitsAtABound(unittest.TestCase):
             self.assertIn("bound", res["stderr_null_reason"][param])
             self.assertFalse(res["peak_beyond_data"], log)
             table = run("replay", "--method", "hybrid", os.path.join(REC, log + ".log")).stdout
-            self.assertIn(f"({param} at bound)", table)
+            self.assertIn(f"({param} at bound", table)
             self.assertNotIn("peak beyond the data", table)
         with tempfile.TemporaryDirectory() as d:
             # Data that stop at 4 % slip, before the peak (about 10 %): said, with no bound.

@@ -16,8 +16,10 @@
 #include "core/exit_codes.hpp"
 #include "daemon/admission.hpp"
 #include "daemon/config.hpp"
+#include "daemon/event_block.hpp"
 #include "daemon/instance_lock.hpp"
 #include "daemon/pending.hpp"
+#include "daemon/registers.hpp"
 #include "daemon/store.hpp"
 #include "daemon/wal_check.hpp"
 #include "daemon_test_util.hpp"
@@ -287,4 +289,29 @@ TEST(Admission, AProtectedAddressIsNeverEvictedByAFloodOfNewOnes) {
   EXPECT_TRUE(b.admit);
   EXPECT_FALSE(c.admit);
   EXPECT_FALSE(c.evict);
+}
+
+TEST(EventBlock, ImplausibleDataAndImplausibleResultsRaiseTheirOwnBits) {
+  auto flags_of = [](const brakefit::pipeline::EventResult& e) {
+    const auto w = event_block(event_json(e, "test", nullptr).dump(), 1, true);
+    for (const auto& [addr, v] : w.input)
+      if (addr == reg("event.flags").address) return v;
+    return std::uint16_t{0xFFFF};
+  };
+  auto e = make_event(1, 50);
+  EXPECT_EQ(flags_of(e) & (kFlagImplausibleData | kFlagImplausibleResult), 0);
+  e.event.flags = {"aborted", "implausible_data"};
+  e.event.end_reason = "implausible_data";
+  EXPECT_NE(flags_of(e) & kFlagImplausibleData, 0);
+  EXPECT_EQ(end_reason_code("implausible_data"), 11);
+  EXPECT_EQ(end_reason_code("max_length"), 10);
+  auto f = make_event(2, 50);
+  MethodResult lm;
+  lm.method = Method::Lm;
+  lm.params = {18.45, 0.3, 13560.0, -4.0};
+  lm.implausible = implausible_curve(lm.params, 3800.0);
+  f.results.push_back(lm);
+  EXPECT_NE(flags_of(f) & kFlagImplausibleResult, 0);
+  const auto doc = event_json(f, "test", nullptr);
+  EXPECT_FALSE(doc["results"][0]["implausible"].empty());
 }

@@ -89,3 +89,33 @@ TEST(EventLimits, TheDeferredFitGivesTheResultsOfTheFitMadeAtTheClose) {
   EXPECT_EQ(later.results[0].params.D, fitted[0].results[0].params.D);
   EXPECT_EQ(later.event.end_reason, fitted[0].event.end_reason);
 }
+
+TEST(TyreLimits, APeakFrictionOrAShapeNoTyreGivesIsNamed) {
+  const MfParams tyre{15.0, 1.6, 4000.0, 0.3};
+  EXPECT_TRUE(implausible_curve(tyre, 3800.0).empty());  // peak friction 1.05
+  const auto heavy = implausible_curve({18.45, 1.6, 13560.0, -4.0}, 3800.0);
+  ASSERT_EQ(heavy.size(), 1u);
+  EXPECT_NE(heavy[0].find("peak friction 3.57"), std::string::npos) << heavy[0];
+  const auto flat = implausible_curve({18.45, 0.3, 4000.0, -4.0}, 3800.0);
+  ASSERT_FALSE(flat.empty());
+  EXPECT_NE(flat[0].find("shape factor C 0.3"), std::string::npos) << flat[0];
+  EXPECT_TRUE(implausible_curve({15.0, 1.6, 13560.0, 0.3}, std::nan("")).empty());  // no load
+  EXPECT_EQ(implausible_curve({15.0, 1.6, 100.0, 0.3}, 3800.0).size(), 1u);         // 0.026
+}
+
+TEST(TyreLimits, AnEventsFitIsJudgedAgainstItsWheelLoad) {
+  Calibration cal;
+  cal.wheel_load_n = 1000.0;  // the ramp's forces reach several times this load
+  PipelineOptions o;
+  o.methods = {Method::Lm};
+  Pipeline p(cal, o, nullptr);
+  for (int i = 0; i < 3000; ++i) {
+    const double slip = 0.27 * i / 2000.0;
+    p.feed(at(i, 1.39, 1.39 * (1 - slip), i < 2990 ? 0.02 * i + 2.0 : 0.0));
+  }
+  auto ev = p.take_events();
+  ASSERT_EQ(ev.size(), 1u);
+  ASSERT_EQ(ev[0].results.size(), 1u);
+  ASSERT_FALSE(ev[0].results[0].implausible.empty());
+  EXPECT_NE(ev[0].results[0].implausible.back().find("peak friction"), std::string::npos);
+}
