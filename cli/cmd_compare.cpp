@@ -257,7 +257,7 @@ void add_compare_command(CLI::App& app) {
                  vb[4] = {b.mean.B, b.mean.C, b.mean.D, b.mean.E};
     const int prec[4] = {3, 4, 1, 4};  // NOLINT
     const char* keys[4] = {"B", "C", "D", "E"};
-    auto bound = [&](const Side& side, std::size_t k, std::string text) {
+    auto bound = [&](const Side& side, std::size_t k, const std::string& text) {
       const auto& ab = side.at_bound;
       return std::find(ab.begin(), ab.end(), keys[k]) == ab.end() ? text : text + " (at bound)";
     };
