@@ -21,22 +21,23 @@ void Daemon::publish_finished(Clock::time_point closed) {
     // 1. Durable as it closes: the raw event goes to its journal file before the fit, so a kill
     //    from here on leaves the file, which the next start fits and commits.
     pipeline::EventResult closed_only;
-    closed_only.event = ev;
+    closed_only.event = std::move(ev);  // moved on to the fit below, not copied
+    const auto& e = closed_only.event;
     EventRecord journaled =
         make_record(closed_only, "", calibration, vehicle_id_, source_->describe(),
                     model_ ? model_->hash : "", static_cast<std::int64_t>(std::time(nullptr)));
     const auto t0 = Clock::now();
     std::string path = pending_->journal(journaled);
     spdlog::info(
-        "event {} closed ({}): {}", ev.event_id, ev.end_reason,
+        "event {} closed ({}): {}", e.event_id, e.end_reason,
         path.empty()
             ? std::string("not journaled, held in memory")
             : fmt::format("journaled to {} in {:.2f} ms", path,
                           std::chrono::duration<double, std::milli>(Clock::now() - t0).count()));
     // 2. Fitted, then kept under the journal's uid (a restart finds the row it may have become).
-    EventRecord r =
-        fitted_record(pipeline_->fit(std::move(ev), pipeline_->calibration()), calibration,
-                      vehicle_id_, source_->describe(), journaled.created_unix_s, true);
+    EventRecord r = fitted_record(
+        pipeline_->fit(std::move(closed_only.event), pipeline_->calibration()), calibration,
+        vehicle_id_, source_->describe(), journaled.created_unix_s, true);
     r.uid = journaled.uid;
     pending_->push(std::move(r), std::move(path));
   }

@@ -171,7 +171,7 @@ std::size_t PendingEvents::adopt_spilled() {
 std::string PendingEvents::next_path(const EventRecord& r) {
   // The uid in the name: two writers (which the instance lock forbids) could never overwrite
   // each other's file; the sequence number keeps the order.
-  return (fs::path(dir_) / fmt::format("{:020d}-{}.cbor", next_file_++, r.uid)).string();
+  return (fs::path(dir_) / fmt::format("{:020d}-{}.cbor", next_file_, r.uid)).string();
 }
 
 std::string PendingEvents::journal(const EventRecord& r) {
@@ -184,6 +184,7 @@ std::string PendingEvents::journal(const EventRecord& r) {
                   ec ? ec.message() : err);
     return {};
   }
+  ++next_file_;  // only a file written takes a number: a failing directory leaves no gaps
   return path;
 }
 

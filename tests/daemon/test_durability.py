@@ -43,15 +43,20 @@ class DurabilityTest(unittest.TestCase):
             f.write("(1700000000.000000) can0 7FF#00\n(1700000000.100000) can0 7FF#00\n")
         return path
 
+    def config(self, name, log, store, source="", daemon=""):
+        """A brakefitd config run directly (not through the helper, which waits for its port)."""
+        cfg = os.path.join(self.tmp, f"{name}.toml")
+        with open(cfg, "w") as f:
+            f.write(f'[daemon]\nmodel = "{MODEL}"\n{daemon}[source]\nkind = "replay"\n'
+                    f'file = "{log}"\n{source}{BENCH}\n'
+                    f'[modbus_tcp]\naddress = "127.0.0.1"\nport = 0\n'
+                    f'[store]\npath = "{store}"\nmin_free_mb = 0\n')
+        return cfg
+
     def recover(self, store):
         """One start on a log without events: it commits what earlier runs left, then exits (too
         soon for the helper's wait for the port, so run here)."""
-        cfg = os.path.join(self.tmp, "recover.toml")
-        with open(cfg, "w") as f:
-            f.write(f'[daemon]\nmodel = "{MODEL}"\n[source]\nkind = "replay"\n'
-                    f'file = "{self.quiet_log()}"\nspeed = 0\nexit_at_end = true\n{BENCH}\n'
-                    f'[modbus_tcp]\naddress = "127.0.0.1"\nport = 0\n'
-                    f'[store]\npath = "{store}"\nmin_free_mb = 0\n')
+        cfg = self.config("recover", self.quiet_log(), store, "speed = 0\nexit_at_end = true\n")
         r = subprocess.run([DAEMON, "--config", cfg], capture_output=True, text=True, timeout=120)
         self.assertEqual(r.returncode, 0, r.stderr)
         return r.stderr
@@ -187,12 +192,8 @@ class DurabilityTest(unittest.TestCase):
             store = os.path.join(mnt, "events.db")
             stats = os.path.join(self.tmp, "small.stats.json")
             err = os.path.join(self.tmp, "small.log")
-            cfg = os.path.join(self.tmp, "small.toml")
-            with open(cfg, "w") as f:
-                f.write(f'[daemon]\nmodel = "{MODEL}"\nstats_file = "{stats}"\n'
-                        f'[source]\nkind = "replay"\nfile = "{log}"\nspeed = 8\nloop = true\n'
-                        f'{BENCH}\n[modbus_tcp]\naddress = "127.0.0.1"\nport = 0\n'
-                        f'[store]\npath = "{store}"\nmin_free_mb = 0\n')
+            cfg = self.config("small", log, store, "speed = 8\nloop = true\n",
+                              f'stats_file = "{stats}"\n')
             with open(err, "w") as ef:
                 proc = subprocess.Popen([DAEMON, "--config", cfg], stdout=ef, stderr=ef)
             time.sleep(1.0)
