@@ -278,8 +278,15 @@ void add_gap_command(CLI::App& app) {
       throw ExitError(kExitConfig, "gap: no runs given (RUNS, or --roller and --road)");
     Curve pooled;
     std::vector<LeftOut> left_out;
+    // Every file's events are read first: how many runs the set has decides how finely each is
+    // kept (gap::points_per_run), so a day of tests costs about what six runs do.
+    struct Usable {
+      std::string path, name;
+      pipeline::Event event;
+      pipeline::Calibration calibration;
+    };
     auto load = [&](const std::vector<std::string>& files, bool pool) {
-      std::vector<gap::Run> runs;
+      std::vector<Usable> usable;
       for (const auto& f : files) {
         const Run run = process_run(f, o->run, nullptr);
         leave_out_if_empty(left_out, run);
@@ -288,19 +295,31 @@ void add_gap_command(CLI::App& app) {
             leave_out(left_out, run, e.event, flagged_reason(e.event));
             continue;
           }
-          const std::string name =
-              fmt::format("{}#{}", std::filesystem::path(f).stem().string(), e.event.event_id);
-          try {
-            runs.push_back(gap::condition(name, e.event, run.calibration, co));
-          } catch (const InputError& err) {
-            leave_out(left_out, run, e.event, err.what());
-            continue;
-          }
+          usable.push_back(
+              {run.path,
+               fmt::format("{}#{}", std::filesystem::path(f).stem().string(), e.event.event_id),
+               e.event, run.calibration});
           if (!pool) continue;
           pooled.slip_ratio.insert(pooled.slip_ratio.end(), e.curve.slip_ratio.begin(),
                                    e.curve.slip_ratio.end());
           pooled.force_n.insert(pooled.force_n.end(), e.curve.force_n.begin(),
                                 e.curve.force_n.end());
+        }
+      }
+      gap::ConditionOptions run_co = co;
+      run_co.max_points = gap::points_per_run(usable.size());
+      if (usable.size() > 6)
+        spdlog::info(
+            "gap: {} runs, {} points each, held out in 6 blocks of consecutive runs: "
+            "expect about {:.0f}x the time three runs take",
+            usable.size(), run_co.max_points, gap::relative_cost(usable.size()));
+      std::vector<gap::Run> runs;
+      for (const auto& u : usable) {
+        try {
+          runs.push_back(gap::condition(u.name, u.event, u.calibration, run_co));
+        } catch (const InputError& err) {
+          spdlog::warn("{}: event {} left out: {}", u.path, u.event.event_id, err.what());
+          left_out.push_back({u.path, u.event.event_id, err.what()});
         }
       }
       return runs;

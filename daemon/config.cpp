@@ -146,7 +146,8 @@ void parse_pipeline(const TomlReader& rd, const toml::table& t, Config& c) {
     rd.fail(p + "release_pressure_bar", "must not exceed start_pressure_bar");
   e.lock_slip_ratio = rd.number(t, p, "lock_slip_ratio", e.lock_slip_ratio, 0.05, 1.0);
   e.min_ref_speed_mps = rd.number(t, p, "min_ref_speed_mps", e.min_ref_speed_mps, 0, 100);
-  e.min_points = static_cast<std::size_t>(rd.integer(t, p, "min_points", 30, 5, 1'000'000));
+  e.min_points = static_cast<std::size_t>(
+      rd.integer(t, p, "min_points", static_cast<std::int64_t>(e.min_points), 5, 1'000'000));
   e.min_duration_s = rd.number(t, p, "min_duration_s", e.min_duration_s, 0, 600);
   e.max_event_s = rd.number(t, p, "max_event_s", e.max_event_s, 1, 3600);
   if (e.max_event_s <= e.min_duration_s) rd.fail(p + "max_event_s", "must exceed min_duration_s");

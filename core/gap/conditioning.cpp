@@ -58,6 +58,28 @@ constexpr double kRunawayMinSlip = 0.02;
 /// few 0.01 bar to the fits (generator A's null BIC drops 6.7 -> 25).
 constexpr double kRestPressureBar = 0.2;
 
+/// A run shorter than this (samples up to the lock or runaway) cannot be smoothed and fitted.
+constexpr std::size_t kMinRunSamples = 12;
+/// The smoother's half window spans at most this long: 10 samples at 500 Hz and up; at 100 Hz
+/// ten samples (0.1 s each side) would bend a 0.35 s ramp's kinks into structure no effect
+/// explains (a null generator C ground set read `unexplained` at a floor of 15 N).
+constexpr double kMaxSmoothHalfWindowS = 0.02;
+/// At least this many samples each side (a quadratic fit over five points).
+constexpr int kMinSmoothHalfWindow = 2;
+
+/// The half window (samples) for a run sampled at t_s: at most `samples`, at most
+/// kMaxSmoothHalfWindowS at the run's median sample interval.
+static int smoothing_half_window(const std::vector<double>& t_s, int samples) {
+  std::vector<double> dt;
+  for (std::size_t i = 1; i < t_s.size(); ++i) dt.push_back(t_s[i] - t_s[i - 1]);
+  if (dt.empty()) return samples;
+  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+  const double interval_s = dt[dt.size() / 2];
+  if (!(interval_s > 0)) return samples;
+  const int in_time = static_cast<int>(std::lround(kMaxSmoothHalfWindowS / interval_s));
+  return std::clamp(in_time, std::min(kMinSmoothHalfWindow, samples), samples);
+}
+
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o) {
   Run full;
@@ -107,14 +129,18 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       }
     }
   }
-  if (full.t_s.size() < 20)
-    throw InputError(fmt::format("{}: too few samples for a diagnosis", name));
+  if (full.t_s.size() < kMinRunSamples)
+    throw InputError(
+        fmt::format("{}: {} samples up to the lock or runaway: too few for a "
+                    "diagnosis (at least {})",
+                    name, full.t_s.size(), kMinRunSamples));
+  const int half_window = smoothing_half_window(full.t_s, o.smooth_half_window);
   // The run's time is the sampler's clock, not each stamp: a tester's stamps are jittered and
   // quantised (0.1-1 ms). Over them the declared pressure filter read a 250 bar/s ramp's stamp
   // errors as force (5 N on B's null ground sets, 2x their floor), and the stamps smoothed kept
   // a scatter that read the deceleration 2 % off mid-run and twice over at the run's end (where
   // the smoother's window shrinks): load transfer seed 101171's stiffness ratio fitted to 0.
-  full.t_s = sampler_clock(full.t_s, o.smooth_half_window);
+  full.t_s = sampler_clock(full.t_s, half_window);
   // A first-order filter the tester declared on its pressure channel stays in the data: the
   // model's force is filtered the same way (predict). (Undoing it, p + tau dp/dt, left 3-6 N of
   // structure on noise-free generator B ground runs: the slope is smeared at the ramp's kink.)
@@ -228,12 +254,11 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   std::vector<double> raw_slip(v_wheel.size());
   for (std::size_t i = 0; i < raw_slip.size(); ++i)
     raw_slip[i] = 1.0 - v_wheel[i] / full.v_ref_mps[i];
-  const std::optional<double> measured_sd = smoothed_noise_sd(raw_slip, o.smooth_half_window);
+  const std::optional<double> measured_sd = smoothed_noise_sd(raw_slip, half_window);
   full.slip_sd_unmeasured = !measured_sd;
   const double slip_sd = measured_sd.value_or(0.0);
-  const auto vr = smooth(full.v_ref_mps, o.smooth_half_window),
-             vw = smooth(v_wheel, o.smooth_half_window);
-  Run::NoiseProbe probe{o.smooth_half_window, std::move(raw_slip), {}, {}, slip_sd};
+  const auto vr = smooth(full.v_ref_mps, half_window), vw = smooth(v_wheel, half_window);
+  Run::NoiseProbe probe{half_window, std::move(raw_slip), {}, {}, slip_sd};
   full.v_ref_mps = vr;
   for (std::size_t i = 0; i < vr.size(); ++i) {
     full.slip.push_back(std::clamp(1.0 - vw[i] / vr[i], -1.0, 1.0));  // below 0: a slip offset
@@ -264,7 +289,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   auto dref = derivative(full.t_s, vr);
   for (double& d : dref) d = -d;
   full.ref_decel_mps2 = dref;
-  full.pressure_rate_bar_per_s = derivative(full.t_s, smooth(pressure, o.smooth_half_window));
+  full.pressure_rate_bar_per_s = derivative(full.t_s, smooth(pressure, half_window));
   // Start state: the slip rate (a line through the first kInitialWindowS) and the force at the
   // first sample (a line through the first 20 ms: a 250 bar/s ramp adds 170 N in 10 ms, so a mean
   // would sit half of that too high).
@@ -315,6 +340,18 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     r.pressure_rate_bar_per_s.push_back(full.pressure_rate_bar_per_s[i]);
   }
   return r;
+}
+
+std::size_t points_per_run(std::size_t n_runs) {
+  constexpr std::size_t kPerRun = ConditionOptions{}.max_points, kBudget = 2400, kFloor = 120;
+  if (n_runs == 0) return kPerRun;
+  return std::clamp(kBudget / n_runs, kFloor, kPerRun);
+}
+
+double relative_cost(std::size_t n_runs) {
+  const double points = static_cast<double>(n_runs * points_per_run(n_runs));
+  const double folds = static_cast<double>(std::min(n_runs, kMaxFolds));
+  return points * folds / (3.0 * ConditionOptions{}.max_points * 3.0);
 }
 
 }  // namespace brakefit::gap

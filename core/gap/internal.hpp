@@ -137,7 +137,10 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
 
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
-/// Leave-one-run-out: RMS over runs of the held-out RMSE with parameters fitted on the others.
+/// Held-out folds at most: up to this many runs each is held out alone (leave one run out).
+inline constexpr std::size_t kMaxFolds = 6;
+/// Held-out error: RMS over runs of each run's RMSE with parameters fitted on the runs outside its
+/// fold (one run per fold up to kMaxFolds runs, blocks of consecutive runs past that).
 double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects, const Fitter& fit);
 std::vector<const Run*> pointers(const std::vector<Run>& runs);
 /// Where: residual of the 4-parameter model by slip region, by phase, by run.

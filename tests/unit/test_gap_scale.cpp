@@ -1,0 +1,134 @@
+// The diagnosis on every export a station makes and on many runs (issue 34): a 100 Hz export is
+// diagnosed like a 1 kHz one, and a set of many runs is held out in blocks, each run kept at a
+// share of a fixed budget of points.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+#include "core/pipeline/event_csv.hpp"
+#include "core/pipeline/pipeline.hpp"
+#include "sim/referee.hpp"
+#include "sim/second/generator.hpp"
+
+using namespace brakefit;
+
+namespace {
+
+/// Generator B's set of `seed` exported at sample_hz, read back and conditioned as `brakefit gap`
+/// does (events too short are left out, as there).
+std::vector<gap::Run> b_set_at(can::BenchKind bench, const std::string& effect, double magnitude,
+                               std::uint64_t seed, double sample_hz) {
+  sim2::SetDraw set = sim2::draw_set(bench, effect, magnitude, seed);
+  std::vector<gap::Run> runs;
+  for (std::size_t k = 0; k < set.runs.size(); ++k) {
+    set.runs[k].tester.sample_hz = sample_hz;
+    const std::string name = fmt::format("b{}", k);
+    const auto csv = pipeline::parse_event_csv(sim2::simulate_event_csv(set.runs[k]), name);
+    pipeline::PipelineOptions o;
+    o.fit = false;
+    pipeline::Pipeline p(csv.calibration, o, nullptr);
+    for (const auto& smp : csv.samples) p.feed(smp);
+    p.finish_file();
+    for (const auto& e : p.events())
+      if (e.event.fittable()) runs.push_back(gap::condition(name, e.event, csv.calibration, {}));
+  }
+  return runs;
+}
+
+}  // namespace
+
+TEST(ExportRates, HundredHzNullSetsAreDiagnosedNotRefused) {
+  // A ground stop at 250 bar/s from 70 km/h lasts a few tenths of a second: 30-60 samples at
+  // 100 Hz. Every run must be kept and the set read as having no effect.
+  for (auto bench : {can::BenchKind::Roller, can::BenchKind::Ground}) {
+    for (std::uint64_t seed : {11u, 12u}) {
+      const auto runs = b_set_at(bench, "none", 0, seed, 100);
+      ASSERT_EQ(runs.size(), 3u) << can::to_string(bench) << " seed " << seed;
+      const auto c =
+          bench == can::BenchKind::Roller ? gap::Condition::Roller : gap::Condition::Ground;
+      const auto rep = gap::diagnose(runs, sim::pooled_start(runs), gap::calibrated_options(c));
+      EXPECT_EQ(rep.verdict, std::vector<std::string>{"none"})
+          << can::to_string(bench) << " seed " << seed << ": gap " << rep.gap_before_rmse_n
+          << " N, floor " << rep.noise_n << " N";
+    }
+  }
+}
+
+TEST(ExportRates, HundredHzRollerSetReadsTheThresholdTheKilohertzExportDoes) {
+  // The same runs exported at 1 kHz and at 100 Hz: the effect named and its magnitude within 3 %
+  // (the smoother spans at most 20 ms each side whatever the rate).
+  double estimate[2] = {0, 0};
+  int k = 0;
+  for (double hz : {1000.0, 100.0}) {
+    const auto runs = b_set_at(can::BenchKind::Roller, "brake_threshold", 3.0, 21, hz);
+    ASSERT_EQ(runs.size(), 3u) << hz << " Hz";
+    const auto rep = gap::diagnose(runs, sim::pooled_start(runs),
+                                   gap::calibrated_options(gap::Condition::Roller));
+    ASSERT_FALSE(rep.verdict.empty());
+    EXPECT_EQ(rep.verdict.front(), "brake_threshold") << hz << " Hz";
+    for (const auto& e : rep.effects)
+      if (e.effect == gap::Effect::BrakeThreshold && e.accepted) estimate[k] = e.params.at(0).second;
+    ++k;
+  }
+  ASSERT_GT(estimate[0], 0.5);
+  EXPECT_NEAR(estimate[1], estimate[0], 0.03 * estimate[0]);
+}
+
+TEST(ManyRuns, PointsPerRunShareABudgetPastSixRuns) {
+  EXPECT_EQ(gap::points_per_run(2), 400u);
+  EXPECT_EQ(gap::points_per_run(6), 400u);
+  EXPECT_EQ(gap::points_per_run(12), 200u);
+  EXPECT_EQ(gap::points_per_run(24), 120u);  // the floor
+  EXPECT_EQ(gap::points_per_run(200), 120u);
+  EXPECT_DOUBLE_EQ(gap::relative_cost(3), 1.0);
+  EXPECT_LT(gap::relative_cost(24), 10.0);
+  EXPECT_GT(gap::relative_cost(200), gap::relative_cost(24));
+}
+
+TEST(ManyRuns, HeldOutInAtMostSixBlocksOfConsecutiveRuns) {
+  // Runs whose force is their index: a fit on some runs returns their mean force as D (B, C, E
+  // make a flat curve), so each held-out error says which runs it was fitted on.
+  auto make = [](std::size_t n) {
+    std::vector<gap::Run> runs(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      runs[i].name = fmt::format("{}", i);
+      runs[i].t_s = {0.0, 0.1};
+      runs[i].v_ref_mps = {1.0, 1.0};
+      runs[i].slip = {0.5, 0.5};
+      runs[i].force_n = {static_cast<double>(i), static_cast<double>(i)};
+    }
+    return runs;
+  };
+  for (std::size_t n : {3u, 6u, 7u, 24u}) {
+    const auto runs = make(n);
+    std::vector<std::vector<std::size_t>> trained_on;
+    const gap::Fitter fit = [&](const std::vector<const gap::Run*>& train,
+                                const std::vector<gap::Effect>&) {
+      std::vector<std::size_t> ids;
+      for (const auto* r : train) ids.push_back(static_cast<std::size_t>(std::stoul(r->name)));
+      trained_on.push_back(ids);
+      gap::Fit f;
+      f.params = {1.0, 1.0, 0.0, 0.0};
+      return f;
+    };
+    gap::heldout(runs, {}, fit);
+    ASSERT_EQ(trained_on.size(), std::min<std::size_t>(n, 6)) << n << " runs";
+    std::vector<int> held(n, 0);
+    for (const auto& ids : trained_on) {
+      // Each fold leaves out one block of consecutive runs and trains on all the others.
+      std::vector<std::size_t> out;
+      for (std::size_t i = 0; i < n; ++i)
+        if (std::find(ids.begin(), ids.end(), i) == ids.end()) out.push_back(i);
+      ASSERT_FALSE(out.empty());
+      EXPECT_EQ(out.back() - out.front() + 1, out.size()) << n << " runs";
+      for (std::size_t i : out) ++held[i];
+    }
+    for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(held[i], 1) << "run " << i << " of " << n;
+  }
+}
+
