@@ -1,15 +1,19 @@
 // The blinded-injection referee of `brakefit gap` (issues 5 and 10):
 //   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
-//               [--generators A,B] [--crossed 1] [--only EFFECT,...] [--why 1|2]
-// Two generators make the runs: A, the project's simulator (candump logs), and B, the second
+//               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1]
+//               [--only EFFECT,...] [--why 1|2]
+// Three generators make the runs: A, the project's simulator (candump logs), B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
-// tester's event-CSV export). For each condition (model vs measurement on the roller and on flat
-// ground; roller vs road, A only): 1. calibrates the acceptance gates on null sets of each
-// generator (seeds 1 000 000 + i, disjoint from the trials'), 2. runs the trials of each
-// generator with its own gates (straight) and with the other's (crossed): each draws an effect
-// or none and a magnitude, simulates three runs, hides the label, diagnoses and scores. Prints
-// the confusion matrix, the false-positive rate on none, the share of null sets said exactly
+// tester's event-CSV export), and C, a physics written outside the project (--gen-c, by default
+// ../shared/gapgen/gen_c.py beside the source tree; roller and ground conditions, its own
+// effects and magnitude ranges, its Burckhardt tyre as the misspecified sets). For each condition
+// (model vs measurement on the roller and on flat ground; roller vs road, A only): 1. calibrates
+// the acceptance gates on null sets of each generator (seeds 1 000 000 + i, disjoint from the
+// trials'), 2. runs the trials of each generator with its own gates (straight) and with the other's
+// (crossed): each draws an effect or none and a magnitude, simulates three runs, hides the label,
+// diagnoses and scores. Prints the confusion matrix, the false-positive rate on none, the share of
+// null sets said exactly
 // ["none"], the magnitude errors and the gap left after correction relative to the noise floor;
 // a JSON document (brakefit.gap_referee/1) last. Trials run on --threads threads (results do not
 // depend on it: each trial has its seed).
@@ -21,6 +25,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -29,6 +34,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench/outside_generator.hpp"
 #include "brakefit/version.hpp"
 #include "sim/referee.hpp"
 
@@ -280,7 +286,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     j["misspecified_none_or_unexplained"] = static_cast<double>(ok) / st.misspecified;
     j["misspecified_said"] = said;
     std::cout << fmt::format(
-        "misspecified tyre (A: Burckhardt, B: brush model): none/unexplained in {}/{}; first "
+        "misspecified tyre (A, C: Burckhardt, B: brush model): none/unexplained in {}/{}; first "
         "verdicts:",
         ok, st.misspecified);
     for (const auto& [k, v] : said) std::cout << fmt::format(" {} {}", k, v);
@@ -292,6 +298,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
 int run(int argc, char** argv) {
   Settings st;
   std::string which = "all", generators = "A,B";
+  std::string gen_c = std::string(BRAKEFIT_SOURCE_DIR) + "/../shared/gapgen/gen_c.py";
+  std::string trials_from;  // --trials-from: only these generators' trials (empty: all)
   bool crossed = true;
   g_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int i = 1; i < argc; i += 2) {
@@ -300,7 +308,8 @@ int run(int argc, char** argv) {
       std::cerr
           << "usage: gap_referee [--condition roller|ground|roller_vs_road|all] [--trials N]\n"
              "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
-             "  [--seed S] [--threads N] [--generators A,B] [--crossed 1|0]\n"
+             "  [--seed S] [--threads N] [--generators A,B,C] [--gen-c SCRIPT] [--crossed 1|0]\n"
+             "  [--trials-from C]      (only these generators' trials; gates from all)\n"
              "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
              "  [--why 1|2]           (1: each miss's notes, the misses are always listed;\n"
              "                         2: each hit too, with its estimate and gap left)\n";
@@ -325,6 +334,10 @@ int run(int argc, char** argv) {
       which = v;
     else if (k == "--generators")
       generators = v;
+    else if (k == "--gen-c")
+      gen_c = v;
+    else if (k == "--trials-from")
+      trials_from = v;
     else if (k == "--only") {
       std::stringstream list(v);
       for (std::string e; std::getline(list, e, ',');) st.only.push_back(e);
@@ -337,6 +350,15 @@ int run(int argc, char** argv) {
       return 64;
     }
   }
+  if (generators.find('C') != std::string::npos) {
+    if (!std::filesystem::exists(gen_c)) {
+      std::cerr << "gap_referee: generator C's script " << gen_c << " is not there (--gen-c)\n";
+      return 66;
+    }
+    sim::set_outside_runs([gen_c](sim::Injection& inj, std::uint64_t seed) {
+      return bench::outside_runs(gen_c, inj, seed);
+    });
+  }
   nlohmann::ordered_json j;
   j["schema"] = "brakefit.gap_referee/1";
   j["version"] = kVersion;
@@ -345,9 +367,9 @@ int run(int argc, char** argv) {
   for (auto c : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad}) {
     if (which != "all" && which != gap::to_string(c)) continue;
     any = true;
-    // Generator B makes model-vs-measurement runs only; roller vs road stays A's.
+    // Generators B and C make model-vs-measurement runs only; roller vs road stays A's.
     std::vector<sim::Generator> gens;
-    for (auto g : {sim::Generator::A, sim::Generator::B})
+    for (auto g : {sim::Generator::A, sim::Generator::B, sim::Generator::C})
       if (generators.find(sim::to_string(g)) != std::string::npos &&
           (g == sim::Generator::A || c != gap::Condition::RollerToRoad))
         gens.push_back(g);
@@ -356,7 +378,8 @@ int run(int argc, char** argv) {
     // Straight (trials and gates of one generator), then crossed (gates of the other).
     for (auto trial : gens)
       for (auto gate : gens)
-        if (gate == trial || crossed)
+        if ((gate == trial || crossed) &&
+            (trials_from.empty() || trials_from.find(sim::to_string(trial)) != std::string::npos))
           j["conditions"].push_back(run_condition(c, st, trial, gates[gate], gate));
   }
   if (!any) {

@@ -78,13 +78,37 @@ Scenario referee_null(can::BenchKind bench) {
 }
 
 const char* to_string(Generator g) {
-  return g == Generator::A ? "A" : "B";
+  switch (g) {
+    case Generator::A:
+      return "A";
+    case Generator::B:
+      return "B";
+    case Generator::C:
+      return "C";
+  }
+  return "?";
 }
 
 namespace {
 
+/// Generator C's effects and ranges (its own: the magnitudes in its units, converted by its
+/// runner). Roller: four; ground: those, wheel inertia, load transfer (h/L) and speed friction.
+std::vector<Range> outside_ranges(gap::Condition c) {
+  std::vector<Range> out = {{"relaxation_length", 0.15, 0.40},
+                            {"time_offset", 0.03, 0.10},
+                            {"brake_threshold", 1.0, 5.0},
+                            {"slip_offset", 0.005, 0.02}};
+  if (c == gap::Condition::Ground)
+    out.insert(
+        out.end(),
+        {{"wheel_inertia", 0.9, 1.5}, {"load_transfer", 0.17, 0.28}, {"speed_friction", 0.8, 1.5}});
+  return out;
+}
+
 /// Generator B has no cradle (its roller bench holds the wheel on one roller).
 std::vector<Range> ranges(gap::Condition c, Generator g) {
+  if (g == Generator::C)
+    return c == gap::Condition::RollerToRoad ? std::vector<Range>{} : outside_ranges(c);
   std::vector<Range> out;
   for (const auto& r : ranges(c))
     if (g == Generator::A || std::string(r.effect) != "cradle_cap") out.push_back(r);
@@ -109,8 +133,8 @@ void append_conditioned(std::vector<gap::Run>& out, const std::string& name, pip
 
 const std::vector<std::string>& referee_effects(gap::Condition c, Generator g) {
   static const auto names = [] {
-    std::vector<std::vector<std::string>> n(6);
-    for (auto gen : {Generator::A, Generator::B})
+    std::vector<std::vector<std::string>> n(9);
+    for (auto gen : {Generator::A, Generator::B, Generator::C})
       for (auto cond :
            {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad})
         for (const auto& r : ranges(cond, gen))
@@ -253,11 +277,25 @@ std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed) {
 }
 
 namespace {
+OutsideRuns g_outside;  // set once by the referee before its threads start
+}  // namespace
+
+void set_outside_runs(OutsideRuns f) {
+  g_outside = std::move(f);
+}
+
+namespace {
 
 /// Blinded: the diagnosis sees the runs only (start values from a least-squares fit of their
 /// pooled points, as `brakefit gap` does without a model).
 gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
                            const gap::Options& o) {
+  if (inj.generator == Generator::C) {
+    if (c == gap::Condition::RollerToRoad || !g_outside)
+      throw InputError("generator C makes roller and ground runs, through the referee's runner");
+    const auto runs = g_outside(inj, seed);
+    return gap::diagnose(runs, pooled_start(runs), o);
+  }
   if (inj.generator == Generator::B) {
     if (c == gap::Condition::RollerToRoad)
       throw InputError("generator B makes model-vs-measurement runs (roller, ground) only");

@@ -5,6 +5,7 @@
 // vs road (the transfer effects). Also the gate calibration on null data (seeds disjoint from the
 // referee's), per condition.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,8 +21,10 @@ Scenario referee_null(can::BenchKind bench);
 
 /// Which physics makes the runs: A, the project's simulator (sim/simulator.*, candump logs), or
 /// B, the second physics written apart (sim/second: .tir tyres, a brush family, its own
-/// integrator, a tester's event-CSV export read back through the event CSV parser).
-enum class Generator { A, B };
+/// integrator, a tester's event-CSV export read back through the event CSV parser), or C, a
+/// physics written outside the project (its runs come from outside_runs, which the referee sets:
+/// the project's own code holds none of it).
+enum class Generator { A, B, C };
 const char* to_string(Generator g);
 
 struct Injection {
@@ -61,6 +64,12 @@ struct TrialResult {
   bool correct() const;
   bool exact() const;  ///< the first verdict is the injected effect (or ["none"])
 };
+/// Generator C's runs for an injection (roller and ground conditions): may set the injection's
+/// magnitude to the truth in the diagnosis parameter's unit. Throws InputError on a set it cannot
+/// make.
+using OutsideRuns = std::function<std::vector<gap::Run>(Injection&, std::uint64_t seed)>;
+void set_outside_runs(OutsideRuns f);
+
 /// Simulates the injection in its condition (from referee_null), diagnoses blind, scores.
 TrialResult run_trial(const Injection& inj, std::uint64_t seed, const gap::Options& o);
 /// The same from a given base (model vs measurement conditions only).

@@ -1,0 +1,100 @@
+#include "bench/outside_generator.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/curve.hpp"
+#include "core/pipeline/event_csv.hpp"
+#include "core/pipeline/pipeline.hpp"
+
+namespace brakefit::bench {
+
+namespace {
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  if (!in) throw InputError(fmt::format("{}: cannot read", p.string()));
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// d ln D / d ln Fz at load fz of the outside generator's tyres (their PDX1, PDX2, FZ0, as its
+/// README publishes them): load transfer's h/L becomes the peak's change per m/s^2 through it.
+double d_ln_d_per_ln_fz(const std::string& tyre, double fz_n) {
+  struct Pdx {
+    double fz0, pdx1, pdx2;
+  };
+  static const std::map<std::string, Pdx> tyres = {{"vw_185_80R14", {3800.0, 1.09, -0.079328}},
+                                                   {"sedan_pac02", {3928.5, 1.1739, -0.16395}},
+                                                   {"mf61_255_55", {6752.0, 1.1632, -0.11154}}};
+  const auto it = tyres.find(tyre);
+  if (it == tyres.end()) throw InputError(fmt::format("generator C: unknown tyre '{}'", tyre));
+  const Pdx& t = it->second;
+  const double dfz = (fz_n - t.fz0) / t.fz0;
+  return 1.0 + t.pdx2 * (fz_n / t.fz0) / (t.pdx1 + t.pdx2 * dfz);
+}
+
+/// The script's vehicle: mass 3.4 Fz0 / g, this wheel's load Fz0 + m (h/L) a / 2.
+constexpr double kLoadPerDecelPerHoverL = 1.7 / 9.81;
+
+}  // namespace
+
+std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& inj,
+                                   std::uint64_t seed) {
+  namespace fs = std::filesystem;
+  std::string dir_template = (fs::temp_directory_path() / "brakefit-genc-XXXXXX").string();
+  if (!mkdtemp(dir_template.data())) throw InputError("generator C: cannot make a temp directory");
+  const fs::path dir = dir_template;
+  struct Cleanup {
+    fs::path d;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(d, ec);
+    }
+  } cleanup{dir};
+  const bool ground = inj.condition == gap::Condition::Ground;
+  const std::string effect = inj.effect == "misspecified" ? "misspec" : inj.effect;
+  const bool has_magnitude = effect != "none" && effect != "misspec";
+  const std::string cmd = fmt::format(
+      "/usr/bin/python3 '{}' '{}' --bench {} --effect {} --seed {}{} >/dev/null 2>'{}'", script,
+      dir.string(), ground ? "ground" : "roller", effect, seed % 4'000'000'000ULL,
+      has_magnitude ? fmt::format(" --magnitude {:.9g}", inj.magnitude) : "",
+      (dir / "stderr").string());
+  if (std::system(cmd.c_str()) != 0)
+    throw InputError(fmt::format("generator C failed: {}: {}", cmd, slurp(dir / "stderr")));
+  const auto truth = nlohmann::json::parse(slurp(dir / "truth.json"));
+  std::vector<gap::Run> out;
+  double wheel_load_n = NAN;
+  for (int k = 0; fs::exists(dir / fmt::format("run{}.csv", k)); ++k) {
+    const std::string name = fmt::format("c{}", k);
+    const auto csv = pipeline::parse_event_csv(slurp(dir / fmt::format("run{}.csv", k)), name);
+    wheel_load_n = csv.calibration.wheel_load_n;
+    pipeline::PipelineOptions o;
+    o.fit = false;
+    pipeline::Pipeline p(csv.calibration, o, nullptr);
+    for (const auto& smp : csv.samples) p.feed(smp);
+    p.finish_file();
+    for (const auto& e : p.events()) {
+      if (!e.event.fittable()) continue;
+      try {
+        out.push_back(gap::condition(name, e.event, csv.calibration, {}));
+      } catch (const InputError&) {
+      }
+    }
+  }
+  if (inj.effect == "slip_offset") inj.magnitude = -inj.magnitude;
+  if (inj.effect == "load_transfer")
+    inj.magnitude *= kLoadPerDecelPerHoverL *
+                     d_ln_d_per_ln_fz(truth.at("tyre").get<std::string>(), wheel_load_n);
+  return out;
+}
+
+}  // namespace brakefit::bench
