@@ -1,17 +1,21 @@
 // brakefit compare A B: the paper's Table VI (parameters side by side, with uncertainties) and
 // Fig. 7 (the two fitted curves overlaid), plus each side's peak brake force and slip at the peak.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <map>
+#include <memory>
 
 #include "brakefit/version.hpp"
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
 #include "cli/recording.hpp"
 #include "core/event_json.hpp"
+#include "core/pipeline/tyre_basis.hpp"
 #include "core/plot/svg.hpp"
 
 namespace brakefit::cli {
@@ -31,6 +35,10 @@ struct Side {
   std::vector<LeftOut> left_out;                   ///< events not used, with the reason
   double wheel_load_n = NAN;                       ///< the first run's calibration
   std::vector<std::string> at_bound, implausible;  ///< of the pooled fit
+  /// "tyre": the events' tyre points and fits (a bench measurement model's effects undone);
+  /// "instrument": the raw force.
+  std::string basis = "instrument";
+  std::string bench_model;  ///< the model file applied (empty: none)
 };
 
 std::vector<std::string> expand(const std::string& p) {
@@ -45,8 +53,12 @@ std::vector<std::string> expand(const std::string& p) {
 }
 
 /// One side from its runs (files or directories of them); label names it in tables and plots.
+/// The bench models given, by the bench they describe ("roller", "ground").
+using BenchModels =
+    std::map<std::string, std::pair<std::string, std::shared_ptr<const gap::BenchModel>>>;
+
 Side load_side(const std::vector<std::string>& paths, const std::string& label,
-               const RunOptions& ro, const Model& model, Method method) {
+               const RunOptions& ro, const Model& model, Method method, const BenchModels& bms) {
   Side s;
   s.label = label;
   for (const auto& p : paths) {
@@ -60,10 +72,25 @@ Side load_side(const std::vector<std::string>& paths, const std::string& label,
     leave_out_if_empty(s.left_out, run);
     for (auto& e : run.events) {
       if (!e.event.fittable()) leave_out(s.left_out, run, e.event, flagged_reason(e.event));
-      for (auto& r : e.results)
+      // A side is fitted on the tyre's basis when a model of its bench was given: every event
+      // then counts with its tyre points, or is left out with the reason it has none.
+      const auto bm = bms.find(can::to_string(e.event.bench));
+      if (bm != bms.end() && e.event.fittable()) {
+        pipeline::add_tyre_results(e, run.calibration, *bm->second.second, &model,
+                                   ro.pipeline.force);
+        s.basis = "tyre";
+        s.bench_model = bm->second.first;
+        if (e.tyre_results.empty()) {
+          leave_out(s.left_out, run, e.event,
+                    fmt::format("no tyre points: {}", fmt::join(e.tyre_notes, "; ")));
+          continue;
+        }
+      }
+      const bool tyre = !e.tyre_results.empty();
+      for (auto& r : tyre ? e.tyre_results : e.results)
         if (r.method == method) {
           s.fits.push_back(r);
-          s.curves.push_back(e.curve);
+          s.curves.push_back(tyre ? e.tyre_curve : e.curve);
         }
     }
   }
@@ -102,6 +129,9 @@ nlohmann::ordered_json side_json(const Side& s) {
   nlohmann::ordered_json j;
   j["label"] = s.label;
   j["files"] = s.files;
+  j["basis"] = s.basis;
+  j["bench_model"] = s.bench_model.empty() ? nlohmann::ordered_json(nullptr)
+                                           : nlohmann::ordered_json(s.bench_model);
   j["events"] = s.fits.size();
   j["left_out"] = left_out_json(s.left_out);
   j["B"] = num(s.mean.B);
@@ -130,7 +160,7 @@ nlohmann::ordered_json side_json(const Side& s) {
 void add_compare_command(CLI::App& app) {
   struct Opts {
     std::string a, b, model, svg, method = "hybrid", force = "pressure";
-    std::vector<std::string> roller, road;
+    std::vector<std::string> roller, road, bench_models;
     bool json = false;
     RunOptions run;
   };
@@ -149,6 +179,9 @@ void add_compare_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--model", o->model,
                   "trained model (default: $BRAKEFIT_MODEL or the shipped model)");
+  cmd->add_option("--bench-model", o->bench_models,
+                  "a bench's measurement model (brakefit gap --bench-model; one per bench kind): "
+                  "the events of that bench are compared on the tyre's basis");
   cmd->add_flag("--json", o->json, "print a brakefit.compare/1 JSON document");
   cmd->add_option("--svg", o->svg, "write the two fitted curves overlaid (paper Fig. 7)");
   cmd->add_option("--force", o->force, "force source: pressure or tester")
@@ -168,17 +201,27 @@ void add_compare_command(CLI::App& app) {
       throw ExitError(kExitUsage,
                       "compare: give A B (two runs or directories), or --roller RUNS... --road "
                       "RUNS...");
+    BenchModels bms;
+    for (const auto& f : o->bench_models) {
+      auto bm = load_bench_model(f);
+      const std::string kind = bm->condition;
+      if (!bms.emplace(kind, std::make_pair(f, std::move(bm))).second)
+        throw ExitError(kExitUsage,
+                        fmt::format("compare: two bench models of a {} bench ({} and {})", kind,
+                                    bms.at(kind).first, f));
+      spdlog::info("bench model {}: {} bench, {}", f, kind, held_effects(*bms.at(kind).second));
+    }
     auto name = [](const std::string& p) { return std::filesystem::path(p).filename().string(); };
     auto runs_label = [](const char* what, const std::vector<std::string>& v) {
       return v.size() == 1 ? std::filesystem::path(v[0]).filename().string()
                            : fmt::format("{} ({})", what, count(v.size(), "run"));
     };
-    const Side a =
-        positional ? load_side({o->a}, name(o->a), o->run, model, method)
-                   : load_side(o->roller, runs_label("roller", o->roller), o->run, model, method);
-    const Side b = positional
-                       ? load_side({o->b}, name(o->b), o->run, model, method)
-                       : load_side(o->road, runs_label("road", o->road), o->run, model, method);
+    const Side a = positional ? load_side({o->a}, name(o->a), o->run, model, method, bms)
+                              : load_side(o->roller, runs_label("roller", o->roller), o->run, model,
+                                          method, bms);
+    const Side b =
+        positional ? load_side({o->b}, name(o->b), o->run, model, method, bms)
+                   : load_side(o->road, runs_label("road", o->road), o->run, model, method, bms);
     if (!o->svg.empty()) {
       plot::XyChart c;
       c.title = fmt::format("{} vs {} ({} fits)", a.label, b.label, o->method);
@@ -249,6 +292,12 @@ void add_compare_command(CLI::App& app) {
         "Pac96 parameters: {} fit to the pooled points of each side (± standard error; "
         "[spread] = std of the per-event fits)\n",
         o->method);
+    for (const Side* side : {&a, &b})
+      std::cout << fmt::format(
+          "  {}: {}\n", side->label,
+          side->basis == "tyre"
+              ? fmt::format("the tyre's curve (bench model {})", side->bench_model)
+              : std::string("the instrument's force (no bench model)"));
     std::cout << fmt::format("  {:<22} {:>24} {:>24} {:>8}\n", "parameter",
                              a.label + ": " + count(a.fits.size(), "event"),
                              b.label + ": " + count(b.fits.size(), "event"), "B/A");

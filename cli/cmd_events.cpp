@@ -35,15 +35,6 @@ daemon::StoredEvent get_event(const daemon::EventStore& s, const std::string& pa
   return *e;
 }
 
-/// "2026-11-23T15:10:00Z" (UTC, ISO 8601).
-std::string iso8601_utc(std::int64_t unix_s) {
-  const auto t = static_cast<std::time_t>(unix_s);
-  std::tm tm{};
-  if (!gmtime_r(&t, &tm)) return std::to_string(unix_s);
-  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}Z", tm.tm_year + 1900, tm.tm_mon + 1,
-                     tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
-}
-
 nlohmann::ordered_json stored_json(const daemon::StoredEvent& e) {
   nlohmann::ordered_json j;
   j["schema"] = "brakefit.stored_event/1";
@@ -87,7 +78,7 @@ void add_events_command(CLI::App& app) {
     if (!o->json)
       std::cout << fmt::format("{:>6}  {:<20}  {:<16}  {:<6}  {:<15}  {:<14}  {:>5}  {}\n", "id",
                                "created (UTC)", "vehicle", "bench", "end", "flags", "pts",
-                               "hybrid B C D E");
+                               "hybrid B C D E (basis)");
     for (const auto& e : events) {
       if (o->json) {
         std::cout << stored_json(e).dump() << "\n";
@@ -95,12 +86,18 @@ void add_events_command(CLI::App& app) {
       }
       std::string fit = "-";
       const auto doc = nlohmann::json::parse(e.result_json, nullptr, false);
-      if (doc.is_object() && doc.contains("results"))
-        for (const auto& r : doc["results"])
+      // The published fits: the tyre's when the event has them (a bench measurement model).
+      const char* key = doc.is_object() && doc.contains("tyre_results") &&
+                                doc["tyre_results"].is_array() && !doc["tyre_results"].empty()
+                            ? "tyre_results"
+                            : "results";
+      if (doc.is_object() && doc.contains(key))
+        for (const auto& r : doc[key])
           if (r.is_object() && r.contains("method") && r["method"] == "hybrid" && r.contains("B") &&
               r["B"].is_number())
-            fit = fmt::format("{:.3f} {:.4f} {:.1f} {:.4f}", r["B"].get<double>(),
-                              r["C"].get<double>(), r["D"].get<double>(), r["E"].get<double>());
+            fit = fmt::format("{:.3f} {:.4f} {:.1f} {:.4f} ({})", r["B"].get<double>(),
+                              r["C"].get<double>(), r["D"].get<double>(), r["E"].get<double>(),
+                              key == std::string("tyre_results") ? "tyre" : "instrument");
       std::cout << fmt::format("{:>6}  {:<20}  {:<16}  {:<6}  {:<15}  {:<14}  {:>5}  {}\n", e.id,
                                iso8601_utc(e.created_unix_s),
                                e.vehicle_id.empty() ? "-" : e.vehicle_id, e.bench, e.end_reason,

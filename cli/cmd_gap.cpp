@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <iostream>
 
@@ -15,6 +16,7 @@
 #include "cli/io.hpp"
 #include "cli/recording.hpp"
 #include "core/event_json.hpp"
+#include "core/gap/bench_model.hpp"
 #include "core/gap/gap.hpp"
 #include "core/plot/svg.hpp"
 
@@ -233,7 +235,7 @@ condition).</p>
 void add_gap_command(CLI::App& app) {
   struct Opts {
     std::vector<std::string> files, roller, road;
-    std::string report, force = "pressure", model;
+    std::string report, force = "pressure", model, bench_model;
     bool json = false;
     RunOptions run;
     double gate_gain = NAN, bic_margin = NAN;  ///< NaN: the calibrated gate of the condition
@@ -251,6 +253,9 @@ void add_gap_command(CLI::App& app) {
   cmd->add_flag("--json", o->json, "print the brakefit.gap/1 document");
   cmd->add_option("--report", o->report, "directory for index.html, residual.svg, curves.svg");
   cmd->add_option("--bench", o->run.bench_file, "bench calibration TOML for candump logs");
+  cmd->add_option("--bench-model", o->bench_model,
+                  "write the bench's measurement model (the instrument effects named, with their "
+                  "magnitudes) to this TOML, for replay/compare --bench-model");
   cmd->add_option("--force", o->force, "pressure or tester")
       ->check(CLI::IsMember({"pressure", "tester"}))
       ->capture_default_str();
@@ -371,6 +376,20 @@ void add_gap_command(CLI::App& app) {
     const auto doc =
         report_json(rep, runs, roller_runs, left_out, model.hash,
                     transfer ? "roller_vs_road" : "model_vs_measurement", condition, gap_options);
+    if (!o->bench_model.empty()) {
+      if (transfer)
+        throw ExitError(kExitUsage,
+                        "gap: --bench-model takes the runs of one bench (model vs measurement)");
+      gap::BenchModel bm = gap::bench_model_from(rep, condition);
+      bm.model_hash = model.hash;
+      bm.date = iso8601_utc(static_cast<std::int64_t>(std::time(nullptr)));
+      bm.runs = o->files;
+      write_file(o->bench_model, gap::format_bench_model(bm));
+      spdlog::info("bench model written to {}: {}{}", o->bench_model, held_effects(bm),
+                   bm.not_held.empty() ? ""
+                                       : fmt::format(" (not held, the tyre's or vehicle's: {})",
+                                                     fmt::join(bm.not_held, ", ")));
+    }
     if (!o->report.empty()) {
       write_report(o->report, rep, runs, doc);
       spdlog::info("report written to {}/index.html", o->report);

@@ -26,12 +26,24 @@ void add_run_options(CLI::App* cmd, RunOptions& ro, std::string& force) {
       ->capture_default_str();
 }
 
+/// One line per method: B, C, D, E, MAPE, RMSE and what must be said beside them.
+void print_results(const std::vector<MethodResult>& results) {
+  for (std::size_t m = 0; m < results.size(); ++m) {
+    const auto& r = results[m];
+    const std::string notes = result_notes(results, m);
+    std::cout << fmt::format(
+        "  {:<7} B {:>8.3f} C {:>6.4f} D {:>8.1f} E {:>8.4f}  MAPE {:>6.2f} %  RMSE {:>7.1f} N{}\n",
+        to_string(r.method), r.params.B, r.params.C, r.params.D, r.params.E, r.metrics.mape_pct,
+        r.metrics.rmse_n, notes.empty() ? "" : "  (" + notes + ")");
+  }
+}
+
 }  // namespace
 
 void add_replay_command(CLI::App& app) {
   struct Opts {
     std::vector<std::string> files;
-    std::string model, report, force = "pressure", method = "all";
+    std::string model, report, force = "pressure", method = "all", bench_model;
     bool json = false;
     RunOptions run;
   };
@@ -47,8 +59,18 @@ void add_replay_command(CLI::App& app) {
   cmd->add_flag("--json", o->json, "one brakefit.event/1 JSON document per event, one per line");
   cmd->add_option("--report", o->report, "directory for per-event SVG plots and events.jsonl");
   add_run_options(cmd, o->run, o->force);
+  cmd->add_option("--bench-model", o->bench_model,
+                  "the bench's measurement model (brakefit gap --bench-model): each event is also "
+                  "fitted with its effects undone, on the tyre's basis");
   cmd->callback([o] {
     const Model model = load_model(resolve_model_path(o->model));
+    if (!o->bench_model.empty()) {
+      o->run.pipeline.bench_model = load_bench_model(o->bench_model);
+      spdlog::info("bench model {}: {} bench, {}", o->bench_model,
+                   o->run.pipeline.bench_model->condition,
+                   held_effects(*o->run.pipeline.bench_model));
+    }
+    const auto* bench_model = o->run.pipeline.bench_model.get();
     o->run.pipeline.force =
         o->force == "tester" ? pipeline::ForceSource::Tester : pipeline::ForceSource::Pressure;
     if (o->method != "all") {
@@ -87,15 +109,13 @@ void add_replay_command(CLI::App& app) {
             100 * e.curve.max_slip_ratio(), e.event.end_reason,
             e.event.flags.empty() ? ""
                                   : fmt::format(" [flags: {}]", fmt::join(e.event.flags, ", ")));
-        for (std::size_t m = 0; m < e.results.size(); ++m) {
-          const auto& r = e.results[m];
-          const std::string notes = result_notes(e.results, m);
+        print_results(e.results);
+        if (bench_model && (!e.tyre_results.empty() || !e.tyre_notes.empty()))
           std::cout << fmt::format(
-              "  {:<7} B {:>8.3f} C {:>6.4f} D {:>8.1f} E {:>8.4f}  MAPE {:>6.2f} %  RMSE {:>7.1f} "
-              "N{}\n",
-              to_string(r.method), r.params.B, r.params.C, r.params.D, r.params.E,
-              r.metrics.mape_pct, r.metrics.rmse_n, notes.empty() ? "" : "  (" + notes + ")");
-        }
+              "  the tyre's curve (the bench model's {} undone){}\n", held_effects(*bench_model),
+              e.tyre_notes.empty() ? std::string()
+                                   : fmt::format(": {}", fmt::join(e.tyre_notes, "; ")));
+        print_results(e.tyre_results);
       }
       if (!o->json && run.events.empty()) std::cout << run.path << ": no brake event found\n";
     }

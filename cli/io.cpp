@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -100,6 +101,15 @@ void log_progress(const std::string& stage, std::size_t done, std::size_t total,
                  100.0 * static_cast<double>(done) / static_cast<double>(total));
   else
     spdlog::info("{}: epoch {}/{} training loss {:.5f}", stage, done, total, loss);
+}
+
+/// "2026-11-23T15:10:00Z" (UTC, ISO 8601).
+std::string iso8601_utc(std::int64_t unix_s) {
+  const auto t = static_cast<std::time_t>(unix_s);
+  std::tm tm{};
+  if (!gmtime_r(&t, &tm)) return std::to_string(unix_s);
+  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}Z", tm.tm_year + 1900, tm.tm_mon + 1,
+                     tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
 }
 
 }  // namespace brakefit::cli

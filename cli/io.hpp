@@ -1,5 +1,6 @@
 #pragma once
 // File I/O for the CLI (core stays free of I/O) and its exit codes.
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -19,6 +20,8 @@ using brakefit::kExitUsage;
 std::string read_file(const std::string& path);
 /// "1 run", "3 runs": a count with its noun.
 std::string count(std::size_t n, const std::string& noun);
+/// "2026-11-23T15:10:00Z" (UTC, ISO 8601).
+std::string iso8601_utc(std::int64_t unix_s);
 /// Writes via a temporary file and rename, so a reader never sees half a file.
 void write_file(const std::string& path, const std::string& content);
 /// Creates the directory an output goes in when it does not exist yet (out/fit.svg on a fresh

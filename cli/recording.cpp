@@ -122,4 +122,22 @@ nlohmann::ordered_json left_out_json(const std::vector<LeftOut>& left_out) {
   return j;
 }
 
+std::shared_ptr<const gap::BenchModel> load_bench_model(const std::string& path) {
+  const std::string text = read_file(path);
+  try {
+    return std::make_shared<const gap::BenchModel>(gap::parse_bench_model(text, path));
+  } catch (const InputError& e) {
+    throw ExitError(kExitDataError, e.what());
+  }
+}
+
+std::string held_effects(const gap::BenchModel& bm) {
+  std::vector<std::string> held;
+  for (const auto& e : bm.effects)
+    held.push_back(fmt::format("{} {} {:.4g}", gap::to_string(e.effect),
+                               gap::effect_param(e.effect).name, e.value));
+  return held.empty() ? std::string("no instrument effect")
+                      : fmt::format("{}", fmt::join(held, ", "));
+}
+
 }  // namespace brakefit::cli

@@ -2,12 +2,14 @@
 // Loading a run for replay, export, compare and gap: a candump log (with its calibration from
 // --bench or <stem>.bench.toml beside it) or an event CSV (calibration in its header), pushed
 // through the core pipeline.
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "core/gap/bench_model.hpp"
 #include "core/pipeline/pipeline.hpp"
 
 namespace brakefit::cli {
@@ -29,6 +31,12 @@ struct Run {
 };
 
 Run process_run(const std::string& path, const RunOptions& o, const Model* model);
+
+/// Reads a bench measurement model (exit 66 when it cannot be read, 65 naming the file and key
+/// when malformed).
+std::shared_ptr<const gap::BenchModel> load_bench_model(const std::string& path);
+/// The effects a bench model holds, e.g. "relaxation_length sigma_m 0.209, wheel_inertia ...".
+std::string held_effects(const gap::BenchModel& bm);
 
 /// An event a command did not use, and why: every command names them on stderr and in its JSON
 /// ("left_out"), so nothing is dropped silently.

@@ -28,6 +28,7 @@ nlohmann::ordered_json num(double v) {
 nlohmann::ordered_json result_json(const MethodResult& r) {
   nlohmann::ordered_json j;
   j["method"] = to_string(r.method);
+  j["basis"] = to_string(r.basis);
   j["B"] = num(r.params.B);
   j["C"] = num(r.params.C);
   j["D"] = num(r.params.D);
@@ -116,6 +117,12 @@ nlohmann::ordered_json event_json(const pipeline::EventResult& e, const std::str
   j["mape_rule"] = kMapeRule;
   j["results"] = nlohmann::ordered_json::array();
   for (const auto& r : e.results) j["results"].push_back(result_json(r));
+  if (!e.tyre_results.empty() || !e.tyre_notes.empty()) {
+    j["tyre_results"] = nlohmann::ordered_json::array();
+    for (const auto& r : e.tyre_results) j["tyre_results"].push_back(result_json(r));
+    j["tyre_max_slip_ratio"] = num(e.tyre_max_slip_ratio);
+    j["tyre_notes"] = e.tyre_notes;
+  }
   return j;
 }
 

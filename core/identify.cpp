@@ -7,6 +7,10 @@
 
 namespace brakefit {
 
+const char* to_string(Basis b) {
+  return b == Basis::Tyre ? "tyre" : "instrument";
+}
+
 std::vector<std::string> implausible_curve(const MfParams& p, double wheel_load_n,
                                            const TyreLimits& l) {
   std::vector<std::string> why;

@@ -34,8 +34,14 @@ enum class Method { Som, Mlp, Lm, Hybrid };
 const char* to_string(Method m);
 bool parse(const std::string& s, Method& out);
 
+/// What a result describes: the instrument's raw force against its slip, or the tyre's curve with
+/// the bench's measured effects undone (a bench measurement model, core/gap/bench_model.hpp).
+enum class Basis { Instrument, Tyre };
+const char* to_string(Basis b);
+
 struct MethodResult {
   Method method = Method::Lm;
+  Basis basis = Basis::Instrument;
   MfParams params;
   FitMetrics metrics;
   bool peak_reached = false;

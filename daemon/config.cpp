@@ -248,7 +248,14 @@ Config parse_config(std::string_view text, const std::string& source) {
   if (r) parse_rtu(rd, *r, c);
   const toml::table* b = rd.table(root, "", "bench");
   if (!b) rd.fail("bench", "missing [bench] table (the bench calibration)");
-  c.calibration = pipeline::calibration_from_table(*b, rd, "bench.");
+  {
+    // measurement_model is the daemon's key in [bench], not the calibration's (a recording's
+    // .bench.toml has no such key).
+    toml::table cal = *b;
+    c.bench_model_path = rd.string(cal, "bench.", "measurement_model", "");
+    cal.erase("measurement_model");
+    c.calibration = pipeline::calibration_from_table(cal, rd, "bench.");
+  }
   c.gpio.ground = c.calibration.bench == can::BenchKind::Ground;
   c.pipeline.events.sensor_timeout_s = c.sensor_timeout_s;
   c.pipeline.parallel_methods = true;
@@ -269,7 +276,23 @@ std::string read_text_file(const std::string& path) {
 }
 
 Config load_config(const std::string& path) {
-  return parse_config(read_text_file(path), path);
+  Config c = parse_config(read_text_file(path), path);
+  if (!c.bench_model_path.empty()) {
+    try {
+      c.pipeline.bench_model = std::make_shared<const gap::BenchModel>(
+          gap::parse_bench_model(read_text_file(c.bench_model_path), c.bench_model_path));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(
+          fmt::format("{}: key 'bench.measurement_model': {}", path, e.what()));
+    }
+    const std::string bench = can::to_string(c.calibration.bench);
+    if (c.pipeline.bench_model->condition != bench)
+      throw std::runtime_error(fmt::format(
+          "{}: key 'bench.measurement_model': {} is a {} bench's model and this bench is a {} "
+          "bench",
+          path, c.bench_model_path, c.pipeline.bench_model->condition, bench));
+  }
+  return c;
 }
 
 }  // namespace brakefit::daemon

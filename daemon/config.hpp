@@ -56,6 +56,9 @@ struct Config {
   std::string source_file;  ///< the config file itself (errors name it)
   std::string log_level = "info";
   std::string model_path;  ///< empty: no model (LM only)
+  /// [bench] measurement_model: the bench's measurement model (brakefit gap --bench-model); each
+  /// event is also fitted on the tyre's basis, and those results are published (empty: none).
+  std::string bench_model_path;
   double sensor_timeout_s = 0.5;
   std::string stats_file;  ///< written on exit: counters and publish latencies (bench)
   SourceKind kind = SourceKind::Replay;

@@ -54,14 +54,16 @@ EventRecord Daemon::fitted_record(const pipeline::EventResult& er, const std::st
     ++events_finished_;
     if (!er.event.flags.empty()) ++events_flagged_;
   }
-  const MethodResult* best = er.results.empty() ? nullptr : &er.results.back();
-  spdlog::info(
-      "event {} ({}): {} points, ended by {}{}{}", er.event.event_id,
-      can::to_string(er.event.bench), er.curve.size(), er.event.end_reason,
-      er.event.flags.empty() ? "" : fmt::format(" [{}]", fmt::join(er.event.flags, ",")),
-      best ? fmt::format(", {} B {:.3f} C {:.4f} D {:.1f} E {:.4f}", to_string(best->method),
-                         best->params.B, best->params.C, best->params.D, best->params.E)
-           : "");
+  // The fits published: the tyre's when a bench measurement model gave them.
+  const auto& published = er.tyre_results.empty() ? er.results : er.tyre_results;
+  const MethodResult* best = published.empty() ? nullptr : &published.back();
+  spdlog::info("event {} ({}): {} points, ended by {}{}{}", er.event.event_id,
+               can::to_string(er.event.bench), er.curve.size(), er.event.end_reason,
+               er.event.flags.empty() ? "" : fmt::format(" [{}]", fmt::join(er.event.flags, ",")),
+               best ? fmt::format(", {} B {:.3f} C {:.4f} D {:.1f} E {:.4f} ({} basis)",
+                                  to_string(best->method), best->params.B, best->params.C,
+                                  best->params.D, best->params.E, to_string(best->basis))
+                    : "");
   return make_record(er, doc.dump(), calibration, vehicle_id, source, model ? model->hash : "",
                      created_unix_s);
 }

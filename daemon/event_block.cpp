@@ -44,18 +44,22 @@ RegisterWrites event_block(const std::string& result_json, std::int64_t id, bool
     if (f == "edges_lost") flags |= kFlagEdgesLost;
     if (f == "implausible_data") flags |= kFlagImplausibleData;
   }
-  const auto& results = doc.at("results");
+  // With a bench measurement model the tyre's fits are published (bit 9 says so); the bound and
+  // plausibility bits describe the fits published.
+  const bool tyre = doc.contains("tyre_results") && doc["tyre_results"].is_array() &&
+                    !doc["tyre_results"].empty();
+  const auto& results = tyre ? doc.at("tyre_results") : doc.at("results");
+  if (tyre) flags |= kFlagTyreBasis;
   if (results.empty()) flags |= kFlagNotFitted;
-  for (const auto& r : results)
-    if (r.is_object() && r.contains("at_bound") && r["at_bound"].is_array() &&
-        !r["at_bound"].empty() && r.contains("method") &&
-        (r["method"] == "lm" || r["method"] == "hybrid"))
-      flags |= kFlagAtBound;
-  for (const auto& r : results)
-    if (r.is_object() && r.contains("implausible") && r["implausible"].is_array() &&
-        !r["implausible"].empty() && r.contains("method") &&
-        (r["method"] == "lm" || r["method"] == "hybrid"))
-      flags |= kFlagImplausibleResult;
+  auto least_squares_has = [&](const char* key) {
+    for (const auto& r : results)
+      if (r.is_object() && r.contains(key) && r[key].is_array() && !r[key].empty() &&
+          r.contains("method") && (r["method"] == "lm" || r["method"] == "hybrid"))
+        return true;
+    return false;
+  };
+  if (least_squares_has("at_bound")) flags |= kFlagAtBound;
+  if (least_squares_has("implausible")) flags |= kFlagImplausibleResult;
   if (!samples_stored) flags |= kFlagSamplesNotStored;
   const std::uint16_t seq = event_seq(id);
   const auto t_start_ns = doc.at("t_start_ns").get<std::int64_t>();

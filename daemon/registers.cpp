@@ -70,7 +70,9 @@ std::vector<RegisterDef> build_map() {
        "parameter (lm or hybrid) at its bound: set by the bound, not the data (JSON at_bound), 7 "
        "implausible data: a speed or pressure outside physical ranges ended the event (not "
        "fitted), 8 implausible result: an lm or hybrid curve no tyre gives (peak friction or "
-       "shape; JSON implausible)"},
+       "shape; JSON implausible), 9 tyre basis: the method blocks carry the tyre's fits with the "
+       "bench measurement model's effects undone (JSON tyre_results); clear: the instrument's "
+       "(JSON results)"},
       {"event.end_reason", T::Input, 105, 1, Y::U16, "",
        "1 switch_off_slip, 2 wheel_lock, 3 release, 4 stopped, 5 sensor_timeout, 6 end_of_data, 7 "
        "tester_aborted, 8 operator_abort, 9 shutdown, 10 max_length, 11 implausible_data, 0 "

@@ -53,6 +53,9 @@ enum EventFlagBit : std::uint16_t {
   kFlagAtBound = 1u << 6,          ///< an lm or hybrid parameter ended on its bound (JSON at_bound)
   kFlagImplausibleData = 1u << 7,  ///< a reading outside physical ranges ended the event
   kFlagImplausibleResult = 1u << 8,  ///< an lm or hybrid curve no tyre gives (JSON implausible)
+  /// The method blocks carry the tyre's fits (a bench measurement model's effects undone; JSON
+  /// tyre_results, basis "tyre"), not the instrument's.
+  kFlagTyreBasis = 1u << 9,
 };
 /// End reasons (input register "event.end_reason").
 std::uint16_t end_reason_code(const std::string& reason);

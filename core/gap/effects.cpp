@@ -125,8 +125,7 @@ EffectParam effect_param(Effect e) {
 /// sigma dk'/dx = k - k' along the rolled distance x, solved exactly for slip linear between
 /// samples (the runs are decimated: an Euler step of 10-25 ms against a time constant sigma/V of
 /// 40-300 ms would misplace the lag). y0: the transient slip at the first sample.
-static std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m,
-                                 double y0) {
+std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0) {
   const std::size_t n = k.size();
   std::vector<double> y(n);
   y[0] = std::clamp(y0, std::min(k[0], 0.0), std::max(k[0], 0.0));

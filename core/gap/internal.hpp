@@ -137,6 +137,9 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
 
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
+/// The transient slip k' of sigma dk'/dx = k - k' along the run's rolled distance, exact for k
+/// linear between its points, from y0 (clamped between 0 and k's first value).
+std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0);
 /// Held-out folds at most: up to this many runs each is held out alone (leave one run out).
 inline constexpr std::size_t kMaxFolds = 6;
 /// Held-out error: RMS over runs of each run's RMSE with parameters fitted on the runs outside its

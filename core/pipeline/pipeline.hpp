@@ -1,13 +1,16 @@
 #pragma once
 // The replay/live pipeline: frames (or samples) in, finished and fitted brake events out. The same
 // code runs in `brakefit replay` and, later, inside brakefitd.
+#include <cmath>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "core/curve_csv.hpp"
+#include "core/gap/bench_model.hpp"
 #include "core/identify.hpp"
 #include "core/pipeline/events.hpp"
 
@@ -24,12 +27,21 @@ struct PipelineOptions {
   /// Closed events are handed over unfitted (take_closed), for the caller to make them durable
   /// before the fit, then fitted with fit(): the daemon's journal. false: fitted as they close.
   bool defer_fit = false;
+  /// A bench's measurement model: each event is fitted again with its effects undone
+  /// (EventResult::tyre_results, tyre_basis.hpp). Null: the instrument's fits only.
+  std::shared_ptr<const gap::BenchModel> bench_model;
 };
 
 struct EventResult {
   Event event;
   Curve curve;
   std::vector<MethodResult> results;  ///< empty for flagged events
+  /// The same methods on the tyre's points (a bench model's effects undone; empty without one),
+  /// and what was left out of those points and why.
+  std::vector<MethodResult> tyre_results;
+  std::vector<std::string> tyre_notes;
+  Curve tyre_curve;                  ///< the tyre's points the tyre_results were fitted to
+  double tyre_max_slip_ratio = NAN;  ///< the largest slip of the tyre's points (NaN: none)
 };
 
 class Pipeline {

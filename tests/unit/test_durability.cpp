@@ -11,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include "core/event_json.hpp"
 #include "core/exit_codes.hpp"
@@ -314,4 +315,40 @@ TEST(EventBlock, ImplausibleDataAndImplausibleResultsRaiseTheirOwnBits) {
   EXPECT_NE(flags_of(f) & kFlagImplausibleResult, 0);
   const auto doc = event_json(f, "test", nullptr);
   EXPECT_FALSE(doc["results"][0]["implausible"].empty());
+}
+
+TEST(EventBlock, TyreBasisFitsArePublishedWithTheirBit) {
+  // With a bench measurement model the method blocks carry the tyre's fits, bit 9 says so, and
+  // the bound and plausibility bits describe what is published.
+  auto block = [](const brakefit::pipeline::EventResult& e) {
+    const auto w = event_block(event_json(e, "test", nullptr).dump(), 1, true);
+    const std::map<std::uint16_t, std::uint16_t> regs(w.input.begin(), w.input.end());
+    const std::uint16_t b = reg("event.hybrid.C").address;
+    return std::make_pair(regs.at(reg("event.flags").address),
+                          unpack_f32_abcd(regs.at(b), regs.at(static_cast<std::uint16_t>(b + 1))));
+  };
+  auto e = make_event(1, 50);
+  MethodResult raw;
+  raw.method = Method::Hybrid;
+  raw.params = {18.45, 0.3, 13560.0, -4.0};
+  raw.at_bound = {"C"};
+  raw.implausible = implausible_curve(raw.params, 3800.0);
+  e.results = {raw};
+  const auto [raw_flags, raw_c] = block(e);
+  EXPECT_EQ(raw_flags & kFlagTyreBasis, 0);
+  EXPECT_NE(raw_flags & kFlagAtBound, 0);
+  EXPECT_FLOAT_EQ(raw_c, 0.3f);
+  MethodResult tyre = raw;
+  tyre.basis = Basis::Tyre;
+  tyre.params = {15.3, 1.58, 3380.0, 0.1};
+  tyre.at_bound.clear();
+  tyre.implausible = implausible_curve(tyre.params, 3800.0);
+  e.tyre_results = {tyre};
+  const auto [flags, c] = block(e);
+  EXPECT_NE(flags & kFlagTyreBasis, 0);
+  EXPECT_EQ(flags & (kFlagAtBound | kFlagImplausibleResult), 0);
+  EXPECT_FLOAT_EQ(c, 1.58f);
+  const auto doc = event_json(e, "test", nullptr);
+  EXPECT_EQ(doc["results"][0]["basis"], "instrument");
+  EXPECT_EQ(doc["tyre_results"][0]["basis"], "tyre");
 }

@@ -1,0 +1,168 @@
+#include "core/gap/bench_model.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/gap/internal.hpp"
+#include "core/toml_reader.hpp"
+
+namespace brakefit::gap {
+
+namespace {
+/// One order for a model's effects (the catalogue's): TOML tables come back sorted by name.
+void sort_effects(BenchModel& m) {
+  std::stable_sort(m.effects.begin(), m.effects.end(),
+                   [](const BenchEffect& a, const BenchEffect& b) { return a.effect < b.effect; });
+}
+}  // namespace
+
+bool is_bench_effect(Effect e) {
+  switch (e) {
+    case Effect::RelaxationLength:
+    case Effect::TimeOffset:
+    case Effect::WheelInertia:
+    case Effect::BrakeThreshold:
+    case Effect::SlipOffset:
+      return true;
+    default:
+      return false;
+  }
+}
+
+BenchModel bench_model_from(const Report& rep, Condition c) {
+  BenchModel m;
+  m.condition = to_string(c);
+  std::size_t at = 4;
+  for (Effect e : rep.accepted) {
+    const std::size_t first = at;
+    at += effect_params(e).size();
+    if (is_nuisance(e)) continue;
+    if (!is_bench_effect(e)) {
+      m.not_held.emplace_back(to_string(e));
+      continue;
+    }
+    BenchEffect b;
+    b.effect = e;
+    b.value = rep.after.params.at(first);
+    b.stderr_ = first < rep.after.stderr_.size() ? rep.after.stderr_[first] : 0.0;
+    m.effects.push_back(b);
+  }
+  return m;
+}
+
+std::string format_bench_model(const BenchModel& in) {
+  BenchModel m = in;
+  sort_effects(m);
+  std::string out = "# A bench's measurement model, written by brakefit gap --bench-model\n";
+  out += fmt::format("# model hash {}, {}, from {} run(s):\n", m.model_hash,
+                     m.date.empty() ? "undated" : m.date, m.runs.size());
+  for (const auto& r : m.runs) out += fmt::format("#   {}\n", r);
+  out += "schema = \"brakefit.bench_model\"\nversion = 1\n";
+  out += fmt::format("condition = \"{}\"\n", m.condition);
+  out += "# named, but the tyre's or the vehicle's: not undone\nnot_held = [";
+  for (std::size_t i = 0; i < m.not_held.size(); ++i)
+    out += fmt::format("{}\"{}\"", i ? ", " : "", m.not_held[i]);
+  out += "]\n";
+  for (const auto& e : m.effects) {
+    const EffectParam p = effect_param(e.effect);
+    out += fmt::format("\n[effects.{}]\n{} = {:.9g}\n{}_stderr = {:.3g}\n", to_string(e.effect),
+                       p.name, e.value, p.name, e.stderr_);
+  }
+  return out;
+}
+
+BenchModel parse_bench_model(std::string_view text, const std::string& source) {
+  const toml::table t = parse_toml(text, source);
+  const TomlReader rd(source);
+  rd.check_keys(t, "", {"schema", "version", "condition", "not_held", "effects"});
+  BenchModel m;
+  if (t["schema"].value_or(std::string()) != "brakefit.bench_model")
+    rd.fail("schema", "expected \"brakefit.bench_model\" (is this a bench model?)");
+  if (t["version"].value_or(std::int64_t{0}) != 1) rd.fail("version", "expected 1");
+  m.condition = t["condition"].value_or(std::string());
+  if (m.condition != "roller" && m.condition != "ground")
+    rd.fail("condition", "expected \"roller\" or \"ground\"");
+  if (const auto* nh = t["not_held"].as_array())
+    for (const auto& v : *nh) m.not_held.push_back(v.value_or(std::string("?")));
+  const auto* effects = t["effects"].as_table();
+  if (!effects) return m;
+  for (const auto& [name, node] : *effects) {
+    const std::string key = "effects." + std::string(name.str());
+    Effect e{};
+    bool found = false;
+    for (Effect cand : {Effect::RelaxationLength, Effect::TimeOffset, Effect::WheelInertia,
+                        Effect::BrakeThreshold, Effect::SlipOffset})
+      if (name.str() == to_string(cand)) {
+        e = cand;
+        found = true;
+      }
+    if (!found || !node.is_table())
+      rd.fail(key,
+              "not an effect a bench model holds (relaxation_length, time_offset, "
+              "wheel_inertia, brake_threshold, slip_offset)");
+    const auto& et = *node.as_table();
+    const EffectParam p = effect_param(e);
+    const std::string param = p.name, err = param + "_stderr";
+    const std::string prefix = key + ".";
+    rd.check_keys(et, prefix, {param, err});
+    if (!et.contains(param)) rd.fail(fmt::format("{}{}", prefix, param), "missing");
+    BenchEffect b;
+    b.effect = e;
+    b.value = rd.number(et, prefix, p.name, 0.0, p.lo, p.hi);
+    b.stderr_ = rd.number(et, prefix, err.c_str(), 0.0, 0.0, 1e9);
+    m.effects.push_back(b);
+  }
+  sort_effects(m);
+  return m;
+}
+
+TyrePoints tyre_points(const Run& r, const BenchModel& m) {
+  const std::size_t n = r.t_s.size();
+  double sigma_m = 0, dt_s = 0, inertia = 0, p0_bar = 0, offset = 0;
+  for (const auto& e : m.effects) {
+    if (e.effect == Effect::RelaxationLength) sigma_m = e.value;
+    if (e.effect == Effect::TimeOffset) dt_s = e.value;
+    if (e.effect == Effect::WheelInertia) inertia = e.value;
+    if (e.effect == Effect::BrakeThreshold) p0_bar = e.value;
+    if (e.effect == Effect::SlipOffset) offset = e.value;
+  }
+  // The slip side as predict() takes it: transient slip, less the offset, read dt earlier.
+  std::vector<double> slip = r.slip;
+  if (sigma_m > 0) slip = relax(r, slip, sigma_m, 0.0);
+  for (double& s : slip) s -= offset;
+  TyrePoints out;
+  std::size_t past_end = 0;
+  const double threshold_n = r.brake_gain_n_per_bar * p0_bar;
+  const double r2 = r.wheel_radius_m * r.wheel_radius_m;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double at = r.t_s[i] - dt_s;
+    if (at > r.t_s.back()) {
+      ++past_end;
+      continue;
+    }
+    const double s = at >= r.t_s.front()
+                         ? interp(r.t_s, slip, at)
+                         : std::max(slip.front() + r.initial_slip_rate_per_s * (at - r.t_s.front()),
+                                    std::min(slip.front(), 0.0));
+    const double accel = r.wheel_accel_mps2.empty() ? 0.0 : r.wheel_accel_mps2[i];
+    out.curve.slip_ratio.push_back(s);
+    // Below the threshold the pads give no torque: the channel reads up to p0 while the tyre
+    // carries only the wheel's inertial force (predict's min(threshold, force), undone).
+    out.curve.force_n.push_back(r.force_n[i] + inertia * accel / r2 -
+                                std::min(threshold_n, r.force_n[i]));
+  }
+  if (r.runaway)
+    out.left_out.emplace_back(
+        fmt::format("the wheel's lock-up runaway from {:.1f} % slip on (a step in the wheel's "
+                    "speed: no quasi-static force)",
+                    100 * r.slip.back()),
+        0);
+  if (past_end)
+    out.left_out.emplace_back(
+        fmt::format("the force channel's lead ({:.3f} s) past the run's end", -dt_s), past_end);
+  return out;
+}
+
+}  // namespace brakefit::gap

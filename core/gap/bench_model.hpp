@@ -1,0 +1,55 @@
+#pragma once
+// A bench's measurement model: the instrument effects `brakefit gap` named on a set of runs, with
+// their magnitudes, held when each event of that bench is fitted so that the published B, C, D,
+// E describe the tyre, not the instrument. The effects are undone on the event's points (the
+// inverse of predict's force and slip sides): the points left are the tyre's steady-state curve,
+// which every method (SOM, MLP, LM, hybrid) fits as it fits a raw curve.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/curve.hpp"
+#include "core/gap/gap.hpp"
+
+namespace brakefit::gap {
+
+struct BenchEffect {
+  Effect effect{};
+  double value = 0.0;    ///< in the effect's parameter unit (effect_param(effect).name)
+  double stderr_ = 0.0;  ///< its standard error from the diagnosis's fit (0: not known)
+};
+
+struct BenchModel {
+  std::string condition;  ///< "roller" or "ground": the bench the runs came from
+  std::vector<BenchEffect> effects;
+  /// Named effects of the tyre or the vehicle, not the instrument (load transfer, speed
+  /// friction): the model does not undo them; they stay in the tyre's curve.
+  std::vector<std::string> not_held;
+  std::string model_hash, date;
+  std::vector<std::string> runs;
+};
+
+/// The effects a bench model undoes: lags (relaxation, time offset), the wheel's inertia, the
+/// brake's threshold and a slip offset.
+bool is_bench_effect(Effect e);
+/// The bench model of a diagnosis: its named effects that are the instrument's, at the final
+/// fit's values and standard errors.
+BenchModel bench_model_from(const Report& rep, Condition c);
+/// TOML text: a header comment (model hash, runs, date), schema/version, condition, and one
+/// [effects.NAME] table per effect with its parameter and PARAM_stderr.
+std::string format_bench_model(const BenchModel& m);
+/// Throws InputError "SOURCE: key 'effects.x.y': ..." on unknown effects or keys, bad values.
+BenchModel parse_bench_model(std::string_view text, const std::string& source);
+
+/// A run's points with the bench's effects undone. Points that cannot be the tyre's are left out,
+/// each kind counted with its reason (the force channel's lead past the run's end). The run
+/// itself ends at the lock-up runaway or a locked wheel (condition): past there the force is the
+/// brake holding the rim, not the tyre's.
+struct TyrePoints {
+  Curve curve;
+  /// Reason and points (0: a stretch the conditioning already cut, such as the runaway).
+  std::vector<std::pair<std::string, std::size_t>> left_out;
+};
+TyrePoints tyre_points(const Run& r, const BenchModel& m);
+
+}  // namespace brakefit::gap

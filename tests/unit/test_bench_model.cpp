@@ -1,0 +1,152 @@
+// A bench's measurement model (issue 36): written and read back, refused with the key named, and
+// undone on an event's points so that what is left is the tyre's curve.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "core/gap/bench_model.hpp"
+#include "core/gap/gap.hpp"
+#include "core/magic_formula.hpp"
+
+using namespace brakefit;
+
+namespace {
+
+/// A roller run at 1.4 m/s: slip rising to 15 % over 1.5 s, the wheel slowing with it.
+gap::Run synthetic_run() {
+  gap::Run r;
+  r.wheel_radius_m = 0.3;
+  r.brake_gain_n_per_bar = 60.0;
+  const std::size_t n = 600;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = 1.5 * static_cast<double>(i) / (n - 1);
+    const double slip = 0.1 * t * t / 1.5 + 0.05 * t / 1.5;
+    r.t_s.push_back(t);
+    r.slip.push_back(slip);
+    r.v_ref_mps.push_back(1.4);
+    // d/dt of 1.4 (1 - slip)
+    r.wheel_accel_mps2.push_back(-1.4 * (0.2 * t / 1.5 + 0.05 / 1.5));
+    r.ref_decel_mps2.push_back(0.0);
+    r.pressure_rate_bar_per_s.push_back(20.0);
+  }
+  r.force_n.assign(n, 0.0);
+  r.initial_slip_rate_per_s = 0.05 / 1.5;
+  return r;
+}
+
+gap::BenchModel model_of(const std::vector<gap::Effect>& effects,
+                         const std::vector<double>& values) {
+  gap::BenchModel m;
+  m.condition = "roller";
+  for (std::size_t i = 0; i < effects.size(); ++i)
+    m.effects.push_back({effects[i], values[i], 0.0});
+  return m;
+}
+
+}  // namespace
+
+TEST(BenchModel, WrittenAndReadBack) {
+  gap::BenchModel m =
+      model_of({gap::Effect::RelaxationLength, gap::Effect::BrakeThreshold}, {0.209, 0.443});
+  m.effects[0].stderr_ = 0.0002;
+  m.not_held = {"load_transfer"};
+  m.model_hash = "sha256:abc";
+  m.date = "2026-11-26T10:00:00Z";
+  m.runs = {"a.log", "b.log"};
+  const std::string text = gap::format_bench_model(m);
+  EXPECT_NE(text.find("sha256:abc"), std::string::npos);
+  EXPECT_NE(text.find("a.log"), std::string::npos);
+  const gap::BenchModel back = gap::parse_bench_model(text, "m.toml");
+  EXPECT_EQ(back.condition, "roller");
+  ASSERT_EQ(back.effects.size(), 2u);
+  EXPECT_EQ(back.effects[0].effect, gap::Effect::RelaxationLength);
+  EXPECT_DOUBLE_EQ(back.effects[0].value, 0.209);
+  EXPECT_DOUBLE_EQ(back.effects[0].stderr_, 0.0002);
+  EXPECT_EQ(back.effects[1].effect, gap::Effect::BrakeThreshold);
+  EXPECT_EQ(back.not_held, std::vector<std::string>{"load_transfer"});
+}
+
+TEST(BenchModel, BadFilesNameTheKey) {
+  auto message = [](const std::string& text) {
+    try {
+      gap::parse_bench_model(text, "m.toml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string head =
+      "schema = \"brakefit.bench_model\"\nversion = 1\ncondition = \"roller\"\n";
+  EXPECT_NE(message("schema = \"other\"\nversion = 1\n").find("'schema'"), std::string::npos);
+  EXPECT_NE(message(head + "[effects.load_transfer]\nq = 1\n").find("'effects.load_transfer'"),
+            std::string::npos);
+  EXPECT_NE(
+      message(head + "[effects.brake_threshold]\np0 = 1\n").find("effects.brake_threshold.p0"),
+      std::string::npos);
+  EXPECT_NE(message(head + "[effects.brake_threshold]\np0_bar = -3\n").find("outside"),
+            std::string::npos);
+  EXPECT_NE(message(head + "[effects.wheel_inertia]\n").find("inertia_kgm2"), std::string::npos);
+  EXPECT_NE(message("schema = \"brakefit.bench_model\"\nversion = 1\ncondition = \"moon\"\n")
+                .find("'condition'"),
+            std::string::npos);
+  EXPECT_EQ(message(head), "no error");
+}
+
+TEST(BenchModel, UndoingTheEffectsLeavesTheTyresCurve) {
+  // The instrument's force made by predict() from a known tyre and known effects: undone with the
+  // same magnitudes, the points lie on the tyre's curve.
+  const MfParams tyre{15.0, 1.58, 3400.0, 0.1, 0, 0};
+  const std::vector<gap::Effect> effects{gap::Effect::WheelInertia, gap::Effect::BrakeThreshold,
+                                         gap::Effect::SlipOffset, gap::Effect::TimeOffset};
+  const std::vector<double> values{0.8, 1.5, 0.004, 0.02};
+  gap::Run r = synthetic_run();
+  std::vector<double> p{tyre.B, tyre.C, tyre.D, tyre.E};
+  p.insert(p.end(), values.begin(), values.end());
+  // The threshold's term reads the measured force: iterate to the fixed point.
+  for (int k = 0; k < 20; ++k) r.force_n = gap::predict(r, p, effects);
+  const gap::TyrePoints pts = gap::tyre_points(r, model_of(effects, values));
+  ASSERT_GT(pts.curve.size(), 500u);
+  double worst = 0, raw_worst = 0;
+  for (std::size_t i = 0; i < pts.curve.size(); ++i) {
+    if (pts.curve.slip_ratio[i] < 0) continue;  // before the ramp reached the tyre
+    worst =
+        std::max(worst, std::abs(pts.curve.force_n[i] - mf_force_n(tyre, pts.curve.slip_ratio[i])));
+  }
+  for (std::size_t i = 0; i < r.t_s.size(); ++i)
+    raw_worst = std::max(raw_worst, std::abs(r.force_n[i] - mf_force_n(tyre, r.slip[i])));
+  EXPECT_LT(worst, 0.005 * tyre.D) << "raw points were " << raw_worst << " N off";
+  EXPECT_GT(raw_worst, 0.05 * tyre.D);  // the effects were there to undo
+}
+
+TEST(BenchModel, TheRelaxationLagIsUndone) {
+  const MfParams tyre{15.0, 1.58, 3400.0, 0.1, 0, 0};
+  gap::Run r = synthetic_run();
+  const std::vector<gap::Effect> effects{gap::Effect::RelaxationLength};
+  r.initial_force_n = 0.0;
+  r.force_n = gap::predict(r, {tyre.B, tyre.C, tyre.D, tyre.E, 0.25}, effects);
+  const gap::TyrePoints pts = gap::tyre_points(r, model_of(effects, {0.25}));
+  double worst = 0;
+  for (std::size_t i = 0; i < pts.curve.size(); ++i)
+    worst =
+        std::max(worst, std::abs(pts.curve.force_n[i] - mf_force_n(tyre, pts.curve.slip_ratio[i])));
+  EXPECT_LT(worst, 0.005 * tyre.D);
+}
+
+TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
+  gap::Report rep;
+  rep.accepted = {gap::Effect::TyreShift, gap::Effect::RelaxationLength, gap::Effect::LoadTransfer,
+                  gap::Effect::WheelInertia};
+  // B C D E, tyre shift, sigma, load transfer (q, ratio), inertia
+  rep.after.params = {15, 1.5, 3400, 0.1, 1e-4, 0.2, 0.03, 1.2, 0.9};
+  rep.after.stderr_ = {0, 0, 0, 0, 0, 0.01, 0, 0, 0.05};
+  const gap::BenchModel m = gap::bench_model_from(rep, gap::Condition::Ground);
+  EXPECT_EQ(m.condition, "ground");
+  ASSERT_EQ(m.effects.size(), 2u);
+  EXPECT_EQ(m.effects[0].effect, gap::Effect::RelaxationLength);
+  EXPECT_DOUBLE_EQ(m.effects[0].value, 0.2);
+  EXPECT_DOUBLE_EQ(m.effects[0].stderr_, 0.01);
+  EXPECT_EQ(m.effects[1].effect, gap::Effect::WheelInertia);
+  EXPECT_DOUBLE_EQ(m.effects[1].value, 0.9);
+  EXPECT_EQ(m.not_held, std::vector<std::string>{"load_transfer"});
+}
