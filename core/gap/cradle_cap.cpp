@@ -47,7 +47,7 @@ std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs) {
     hi = std::max(hi, f);
     sum += f;
     const double initial = force_slope(r, 0.05 * f, 0.3 * f);
-    const double end = force_slope(r, 0.85 * f, 1.0 * f);
+    const double end = force_slope(r, kCapKinkFrom * f, 1.0 * f);
     if (!(initial > 0) || !std::isfinite(end)) return std::nullopt;
     ratio = std::min(ratio, end / initial);
   }
@@ -55,8 +55,19 @@ std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs) {
   e.cap_n = sum / static_cast<double>(runs.size());
   e.spread = (hi - lo) / e.cap_n;
   e.end_slope_ratio = ratio;
-  if (e.spread > 0.03 || e.end_slope_ratio < 0.3) return std::nullopt;
+  if (e.spread > 0.03 || e.end_slope_ratio < kCapMinEndSlopeRatio) return std::nullopt;
   return e;
+}
+
+double cap_kink_ratio(const std::vector<Run>& runs, double cap_n) {
+  double ratio = INFINITY;
+  for (const Run& r : runs) {
+    const double initial = force_slope(r, 0.05 * cap_n, 0.3 * cap_n);
+    const double end = force_slope(r, kCapKinkFrom * cap_n, kCapKinkTo * cap_n);
+    if (!(initial > 0) || !std::isfinite(end)) return NAN;
+    ratio = std::min(ratio, end / initial);
+  }
+  return runs.empty() ? NAN : ratio;
 }
 
 /// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole

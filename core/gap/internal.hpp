@@ -140,6 +140,14 @@ using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vect
 /// The transient slip k' of sigma dk'/dx = k - k' along the run's rolled distance, exact for k
 /// linear between its points, from y0 (clamped between 0 and k's first value).
 std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0);
+/// A force cap cuts the curve where it still rises: over the last 15 % of force below the cap
+/// (up to 98 % of it for a fitted cap, whose runs go on past it) the force's slope over slip is
+/// at least this share of its initial slope (5-30 % of the cap). A tyre's own top, and a curve
+/// that is not a Magic Formula (flat-topped), flatten gradually and stay below it.
+inline constexpr double kCapKinkFrom = 0.85, kCapKinkTo = 0.98, kCapMinEndSlopeRatio = 0.3;
+/// The smallest over the runs of that slope ratio at cap_n (NaN where a run has too few points
+/// in either band to say).
+double cap_kink_ratio(const std::vector<Run>& runs, double cap_n);
 /// Held-out folds at most: up to this many runs each is held out alone (leave one run out).
 inline constexpr std::size_t kMaxFolds = 6;
 /// Held-out error: RMS over runs of each run's RMSE with parameters fitted on the runs outside its

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
 #include "core/pipeline/pipeline.hpp"
 #include "sim/referee.hpp"
 #include "sim/simulator.hpp"
@@ -316,4 +317,27 @@ TEST(GapReferee, NullSaysNoneAndAMisspecifiedTyreInventsNoEffect) {
   ASSERT_FALSE(mis.verdict.empty());
   EXPECT_TRUE(mis.correct()) << mis.verdict.front();
   EXPECT_EQ(mis.verdict.front(), "unexplained");
+}
+
+TEST(Gap, AFittedCapNeedsTheKinkOnlyACapLeaves) {
+  // A cap cuts the curve where it still rises: below it the force keeps at least 30 % of its
+  // initial slope. A curve that is not a Magic Formula (Burckhardt's, flat-topped) flattens
+  // gradually: a cap fitted to its top is not named (it cannot be told from the curve's shape).
+  sim::Scenario capped = sim::referee_null(can::BenchKind::Roller);
+  capped.wheel_inertia_kgm2 = 1.0;  // a real wheel: runs away gradually, the cap is fitted
+  capped.effects.cradle_cap_ratio = 3000.0 / capped.wheel_load_n;
+  EXPECT_GE(gap::cap_kink_ratio(sim::simulate_runs(capped, 21), 3000.0), gap::kCapMinEndSlopeRatio);
+  sim::Injection mis{"misspecified", 0, gap::Condition::Roller, sim::Generator::A};
+  for (std::uint64_t seed : {31u, 32u}) {
+    const auto rs =
+        sim::simulate_runs(sim::inject(sim::referee_null(can::BenchKind::Roller), mis), seed);
+    double top_n = 0;
+    for (const auto& r : rs)
+      for (double f : r.force_n) top_n = std::max(top_n, f);
+    EXPECT_LT(gap::cap_kink_ratio(rs, top_n), gap::kCapMinEndSlopeRatio) << seed;
+    const gap::Report r =
+        gap::diagnose(rs, sim::pooled_start(rs), gap::calibrated_options(gap::Condition::Roller));
+    print(r);
+    EXPECT_EQ(std::find(r.verdict.begin(), r.verdict.end(), "cradle_cap"), r.verdict.end()) << seed;
+  }
 }
