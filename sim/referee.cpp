@@ -257,11 +257,13 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
 
 }  // namespace
 
-std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed) {
+std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, double sample_hz) {
   const auto bench =
       inj.condition == gap::Condition::Ground ? can::BenchKind::Ground : can::BenchKind::Roller;
-  const sim2::SetDraw set = sim2::draw_set(bench, inj.effect, inj.magnitude, seed);
+  sim2::SetDraw set = sim2::draw_set(bench, inj.effect, inj.magnitude, seed);
   inj.magnitude = set.magnitude;
+  if (sample_hz > 0)
+    for (auto& run : set.runs) run.tester.sample_hz = sample_hz;
   std::vector<gap::Run> out;
   for (std::size_t k = 0; k < set.runs.size(); ++k) {
     const std::string name = fmt::format("b{}", k);

@@ -10,10 +10,7 @@
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
-#include "core/pipeline/event_csv.hpp"
-#include "core/pipeline/pipeline.hpp"
 #include "sim/referee.hpp"
-#include "sim/second/generator.hpp"
 
 using namespace brakefit;
 
@@ -23,21 +20,11 @@ namespace {
 /// does (events too short are left out, as there).
 std::vector<gap::Run> b_set_at(can::BenchKind bench, const std::string& effect, double magnitude,
                                std::uint64_t seed, double sample_hz) {
-  sim2::SetDraw set = sim2::draw_set(bench, effect, magnitude, seed);
-  std::vector<gap::Run> runs;
-  for (std::size_t k = 0; k < set.runs.size(); ++k) {
-    set.runs[k].tester.sample_hz = sample_hz;
-    const std::string name = fmt::format("b{}", k);
-    const auto csv = pipeline::parse_event_csv(sim2::simulate_event_csv(set.runs[k]), name);
-    pipeline::PipelineOptions o;
-    o.fit = false;
-    pipeline::Pipeline p(csv.calibration, o, nullptr);
-    for (const auto& smp : csv.samples) p.feed(smp);
-    p.finish_file();
-    for (const auto& e : p.events())
-      if (e.event.fittable()) runs.push_back(gap::condition(name, e.event, csv.calibration, {}));
-  }
-  return runs;
+  sim::Injection inj{
+      effect, magnitude,
+      bench == can::BenchKind::Roller ? gap::Condition::Roller : gap::Condition::Ground,
+      sim::Generator::B};
+  return sim::generator_b_runs(inj, seed, sample_hz);
 }
 
 }  // namespace
@@ -72,7 +59,8 @@ TEST(ExportRates, HundredHzRollerSetReadsTheThresholdTheKilohertzExportDoes) {
     ASSERT_FALSE(rep.verdict.empty());
     EXPECT_EQ(rep.verdict.front(), "brake_threshold") << hz << " Hz";
     for (const auto& e : rep.effects)
-      if (e.effect == gap::Effect::BrakeThreshold && e.accepted) estimate[k] = e.params.at(0).second;
+      if (e.effect == gap::Effect::BrakeThreshold && e.accepted)
+        estimate[k] = e.params.at(0).second;
     ++k;
   }
   ASSERT_GT(estimate[0], 0.5);
@@ -131,4 +119,3 @@ TEST(ManyRuns, HeldOutInAtMostSixBlocksOfConsecutiveRuns) {
     for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(held[i], 1) << "run " << i << " of " << n;
   }
 }
-
