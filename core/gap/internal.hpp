@@ -148,6 +148,19 @@ inline constexpr double kCapKinkFrom = 0.85, kCapKinkTo = 0.98, kCapMinEndSlopeR
 /// The smallest over the runs of that slope ratio at cap_n (NaN where a run has too few points
 /// in either band to say).
 double cap_kink_ratio(const std::vector<Run>& runs, double cap_n);
+/// On the roller a brake threshold holds the wheel at its free-rolling slip while the pressure
+/// rises to it: the
+/// slip there may move at most this share of what the fitted curve's initial stiffness gives
+/// (generators A and B's roller thresholds: -0.1 to 0.15; a Burckhardt curve's steep foot fitted
+/// as a threshold on generator C: 0.31-0.45).
+inline constexpr double kDeadZoneMaxSlipRatio = 0.25;
+/// Why a candidate that passed the gates lacks the evidence only its effect leaves (evidence.cpp):
+/// the note (with {} where the round's "after ..." goes) and the score's decision.
+struct MissingEvidence {
+  std::string note, decision;
+};
+std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f,
+                                                const std::vector<Run>& runs);
 /// Held-out folds at most: up to this many runs each is held out alone (leave one run out).
 inline constexpr std::size_t kMaxFolds = 6;
 /// Held-out error: RMS over runs of each run's RMSE with parameters fitted on the runs outside its

@@ -278,26 +278,16 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
                 : ""));
         e.decision = fmt::format("within the nuisance terms' slip ({:.2g})", resolution);
       }
-      // A force cap cuts the curve while it still rises (cradle_cap_evidence: a light wheel
-      // runs away there; a heavy one gradually, and the cap is fitted). A cap fitted where the
-      // runs flatten gradually only flattens the curve's top, as a curve that is not a Magic
-      // Formula is flat-topped (generator C's Burckhardt tyres were named cradle_cap in 28 of 30
-      // roller sets): the two cannot be told apart.
-      if (inside && e.effect == Effect::CradleCap) {
-        const double kink = cap_kink_ratio(runs, e.params[0].second);
-        if (!(kink >= kCapMinEndSlopeRatio)) {
+      // The evidence only the effect leaves (a cap's kink, a dead zone's free-rolling wheel):
+      // without it a curve that is not a Magic Formula fits alike (generator C's Burckhardt
+      // tyres were named cradle_cap in 28 of 30 roller sets).
+      if (inside) {
+        if (const auto missing = missing_evidence(e, fits[order[k]], runs)) {
           inside = false;
-          rep.notes.push_back(fmt::format(
-              "a force cap at {:.0f} N fits{} (held-out gain {:.3f}) but cannot be told from a "
-              "flat-topped curve: below it the force flattens gradually ({} of its initial "
-              "slope over its last 15 %; a cap cuts a curve still rising, at least {:.0f} %); "
-              "not accepted",
-              e.params[0].second, round == 0 ? "" : fmt::format(" after {}", after_names()),
-              e.gain,
-              std::isfinite(kink) ? fmt::format("{:.0f} %", 100 * kink)
-                                  : std::string("too few points to measure"),
-              100 * kCapMinEndSlopeRatio));
-          e.decision = "a flat-topped curve fits alike (no kink at the cap)";
+          rep.notes.push_back(
+              fmt::format(fmt::runtime(missing->note),
+                          round == 0 ? "" : fmt::format(" after {}", after_names())));
+          e.decision = missing->decision;
         }
       }
       if (inside) pick = k;

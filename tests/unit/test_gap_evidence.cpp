@@ -1,0 +1,46 @@
+// The evidence only one effect leaves (issue 34): a brake threshold holds the wheel rolling free
+// while the pressure rises to it; a steep foot of a curve that is not a Magic Formula does not.
+#include <gtest/gtest.h>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+
+using namespace brakefit;
+
+namespace {
+
+/// A roller run from rest: the force ramps 0 -> 1200 N; below p0 (2 bar, 120 N) the slip stays
+/// at its rest value (dead zone) or follows the force at the curve's initial stiffness.
+gap::Run rise(bool dead_zone) {
+  gap::Run r;
+  r.bench = can::BenchKind::Roller;
+  r.brake_gain_n_per_bar = 60.0;
+  const double stiffness_n = 80'000.0, thr_n = 120.0;
+  for (int i = 0; i <= 400; ++i) {
+    const double f = 3.0 * i;
+    r.t_s.push_back(0.001 * i);
+    r.force_n.push_back(f);
+    const double tyre_n = dead_zone ? std::max(0.0, f - thr_n) : f;
+    r.slip.push_back(2e-4 + tyre_n / stiffness_n);
+  }
+  return r;
+}
+
+}  // namespace
+
+TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
+  gap::EffectScore s;
+  s.effect = gap::Effect::BrakeThreshold;
+  s.params = {{"p0_bar", 2.0}};
+  s.gain = 0.3;
+  gap::Fit f;
+  f.params = {16.0, 1.6, 3125.0, 0.1, 2.0};  // B C D = 80 kN
+  EXPECT_FALSE(gap::missing_evidence(s, f, {rise(true), rise(true)}).has_value());
+  const auto missing = gap::missing_evidence(s, f, {rise(false), rise(false)});
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_NE(missing->note.find("did not roll free below it"), std::string::npos);
+  // A run that starts above the threshold shows no rise: nothing to hold against it.
+  gap::Run late = rise(false);
+  for (double& x : late.force_n) x += 200.0;
+  EXPECT_FALSE(gap::missing_evidence(s, f, {late, late}).has_value());
+}
