@@ -46,7 +46,7 @@ BenchModel bench_model_from(const Report& rep, Condition c) {
     BenchEffect b;
     b.effect = e;
     b.value = rep.after.params.at(first);
-    b.stderr_ = first < rep.after.stderr_.size() ? rep.after.stderr_[first] : 0.0;
+    b.stderr_ = first < rep.after.stderr_.size() ? rep.after.stderr_[first] : NAN;
     m.effects.push_back(b);
   }
   return m;
@@ -67,8 +67,9 @@ std::string format_bench_model(const BenchModel& in) {
   out += "]\n";
   for (const auto& e : m.effects) {
     const EffectParam p = effect_param(e.effect);
-    out += fmt::format("\n[effects.{}]\n{} = {:.9g}\n{}_stderr = {:.3g}\n", to_string(e.effect),
-                       p.name, e.value, p.name, e.stderr_);
+    out += fmt::format("\n[effects.{}]\n{} = {:.9g}\n", to_string(e.effect), p.name, e.value);
+    out += std::isfinite(e.stderr_) ? fmt::format("{}_stderr = {:.3g}\n", p.name, e.stderr_)
+                                    : "# standard error not known (the fit's covariance was not)\n";
   }
   return out;
 }
@@ -111,7 +112,7 @@ BenchModel parse_bench_model(std::string_view text, const std::string& source) {
     BenchEffect b;
     b.effect = e;
     b.value = rd.number(et, prefix, p.name, 0.0, p.lo, p.hi);
-    b.stderr_ = rd.number(et, prefix, err.c_str(), 0.0, 0.0, 1e9);
+    b.stderr_ = rd.number(et, prefix, err.c_str(), NAN, 0.0, 1e9);
     m.effects.push_back(b);
   }
   sort_effects(m);

@@ -4,6 +4,7 @@
 // E describe the tyre, not the instrument. The effects are undone on the event's points (the
 // inverse of predict's force and slip sides): the points left are the tyre's steady-state curve,
 // which every method (SOM, MLP, LM, hybrid) fits as it fits a raw curve.
+#include <cmath>
 #include <string>
 #include <string_view>
 #include <vector>

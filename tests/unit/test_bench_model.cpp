@@ -40,7 +40,7 @@ gap::BenchModel model_of(const std::vector<gap::Effect>& effects,
   gap::BenchModel m;
   m.condition = "roller";
   for (std::size_t i = 0; i < effects.size(); ++i)
-    m.effects.push_back({effects[i], values[i], 0.0});
+    m.effects.push_back({effects[i], values[i], NAN});
   return m;
 }
 
@@ -64,6 +64,9 @@ TEST(BenchModel, WrittenAndReadBack) {
   EXPECT_DOUBLE_EQ(back.effects[0].value, 0.209);
   EXPECT_DOUBLE_EQ(back.effects[0].stderr_, 0.0002);
   EXPECT_EQ(back.effects[1].effect, gap::Effect::BrakeThreshold);
+  // A standard error the fit could not give is said so, not written as a number.
+  EXPECT_TRUE(std::isnan(back.effects[1].stderr_));
+  EXPECT_NE(text.find("# standard error not known"), std::string::npos);
   EXPECT_EQ(back.not_held, std::vector<std::string>{"load_transfer"});
 }
 
