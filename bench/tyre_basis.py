@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Per-event fits on the instrument's and on the tyre's basis, against the truth.
 
-    bench/tyre_basis.py [--build build/release] [--gen-c ../shared/gapgen/gen_c.py --c-sets 20]
+    bench/tyre_basis.py [--build build/release]
+    /usr/bin/python3 bench/tyre_basis.py --gen-c ../shared/gapgen/gen_c.py --c-sets 12
+      (generator C imports numpy: Debian's python3-numpy, under /usr/bin/python3)
 
 1. The shipped recordings (data/recorded, each with its .truth.json): for each bench and tyre
    pressure, `brakefit gap --bench-model` on its three runs writes the bench's measurement model;
