@@ -12,7 +12,6 @@
 
 #include "core/curve.hpp"
 #include "core/pipeline/event_csv.hpp"
-#include "core/pipeline/pipeline.hpp"
 
 namespace brakefit::bench {
 
@@ -75,20 +74,9 @@ std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& in
   double wheel_load_n = NAN;
   for (int k = 0; fs::exists(dir / fmt::format("run{}.csv", k)); ++k) {
     const std::string name = fmt::format("c{}", k);
-    const auto csv = pipeline::parse_event_csv(slurp(dir / fmt::format("run{}.csv", k)), name);
-    wheel_load_n = csv.calibration.wheel_load_n;
-    pipeline::PipelineOptions o;
-    o.fit = false;
-    pipeline::Pipeline p(csv.calibration, o, nullptr);
-    for (const auto& smp : csv.samples) p.feed(smp);
-    p.finish_file();
-    for (const auto& e : p.events()) {
-      if (!e.event.fittable()) continue;
-      try {
-        out.push_back(gap::condition(name, e.event, csv.calibration, {}));
-      } catch (const InputError&) {
-      }
-    }
+    const std::string text = slurp(dir / fmt::format("run{}.csv", k));
+    wheel_load_n = pipeline::parse_event_csv(text, name).calibration.wheel_load_n;
+    sim::append_event_csv_runs(out, text, name);
   }
   if (inj.effect == "slip_offset") inj.magnitude = -inj.magnitude;
   if (inj.effect == "load_transfer")

@@ -265,17 +265,20 @@ std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, doubl
   if (sample_hz > 0)
     for (auto& run : set.runs) run.tester.sample_hz = sample_hz;
   std::vector<gap::Run> out;
-  for (std::size_t k = 0; k < set.runs.size(); ++k) {
-    const std::string name = fmt::format("b{}", k);
-    const auto csv = pipeline::parse_event_csv(sim2::simulate_event_csv(set.runs[k]), name);
-    pipeline::PipelineOptions o;
-    o.fit = false;
-    pipeline::Pipeline p(csv.calibration, o, nullptr);
-    for (const auto& smp : csv.samples) p.feed(smp);
-    p.finish_file();
-    append_conditioned(out, name, p, csv.calibration);
-  }
+  for (std::size_t k = 0; k < set.runs.size(); ++k)
+    append_event_csv_runs(out, sim2::simulate_event_csv(set.runs[k]), fmt::format("b{}", k));
   return out;
+}
+
+void append_event_csv_runs(std::vector<gap::Run>& out, const std::string& text,
+                           const std::string& name) {
+  const auto csv = pipeline::parse_event_csv(text, name);
+  pipeline::PipelineOptions o;
+  o.fit = false;
+  pipeline::Pipeline p(csv.calibration, o, nullptr);
+  for (const auto& smp : csv.samples) p.feed(smp);
+  p.finish_file();
+  append_conditioned(out, name, p, csv.calibration);
 }
 
 namespace {

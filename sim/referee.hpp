@@ -41,6 +41,10 @@ Injection draw_injection(Rng& rng, double p_none, gap::Condition c = gap::Condit
 /// Generator B: three runs (roller: three pedal ramps; ground: 30, 50, 70 km/h) exported as event
 /// CSVs, read back through parse_event_csv and the pipeline, conditioned. The injection's
 /// magnitude is set to the drawn truth where the vehicle decides it (load transfer).
+/// An event CSV's text read back through the parser and the pipeline, its fittable events
+/// conditioned (an event too short to condition is skipped) and appended to out.
+void append_event_csv_runs(std::vector<gap::Run>& out, const std::string& text,
+                           const std::string& name);
 /// sample_hz: the tester's export rate (0: the drawn set's own, 1 kHz).
 std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, double sample_hz = 0);
 /// The scenario with the injection switched on (everything else as in base). In the transfer
