@@ -14,5 +14,6 @@ void add_export_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_events_command(CLI::App& app);
 void add_gap_command(CLI::App& app);
+void add_tyre_command(CLI::App& app);
 
 }  // namespace brakefit::cli
