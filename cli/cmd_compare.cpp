@@ -14,6 +14,7 @@
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
 #include "cli/recording.hpp"
+#include "cli/tyre_report.hpp"
 #include "core/event_json.hpp"
 #include "core/pipeline/tyre_basis.hpp"
 #include "core/plot/svg.hpp"
@@ -27,8 +28,9 @@ struct Side {
   std::vector<std::string> files;
   std::vector<MethodResult> fits;  ///< one per fitted event
   std::vector<Curve> curves;
-  MfParams mean;                        ///< fit to the pooled points of all events
-  std::array<double, 4> uncertainty{};  ///< standard errors of that fit
+  std::vector<tyre::TyreCurve> tyre_curves;  ///< the same curves where they were measured
+  MfParams mean;                             ///< fit to the pooled points of all events
+  std::array<double, 4> uncertainty{};       ///< standard errors of that fit
   std::array<double, 4> spread{};  ///< standard deviation of the per-event fits (NaN for one event)
   double rmse_n = 0.0;
   double peak_force_n = 0.0, peak_slip_ratio = 0.0;
@@ -91,6 +93,9 @@ Side load_side(const std::vector<std::string>& paths, const std::string& label,
         if (r.method == method) {
           s.fits.push_back(r);
           s.curves.push_back(tyre ? e.tyre_curve : e.curve);
+          s.tyre_curves.push_back(tyre_curve(fmt::format("{} event {}", f, e.event.event_id),
+                                             s.curves.back(), run.calibration,
+                                             tyre ? e.tyre_results : e.results));
         }
     }
   }
@@ -222,6 +227,8 @@ void add_compare_command(CLI::App& app) {
     const Side b =
         positional ? load_side({o->b}, name(o->b), o->run, model, method, bms)
                    : load_side(o->road, runs_label("road", o->road), o->run, model, method, bms);
+    // A's curves against an MF 6.1 file fitted to B's: A relative to B as MF scaling factors.
+    const std::optional<RigScaling> scaling = rig_relative_to(a.tyre_curves, b.tyre_curves);
     if (!o->svg.empty()) {
       plot::XyChart c;
       c.title = fmt::format("{} vs {} ({} fits)", a.label, b.label, o->method);
@@ -281,6 +288,8 @@ void add_compare_command(CLI::App& app) {
                              {"C", num(b.mean.C / a.mean.C)},
                              {"D", num(b.mean.D / a.mean.D)},
                              {"peak_force", num(b.peak_force_n / a.peak_force_n)}};
+      j["mf61_scaling"] =
+          scaling ? rig_scaling_json(*scaling, a.label, b.label) : nlohmann::ordered_json(nullptr);
       std::cout << j.dump() << "\n";
       return;
     }
@@ -332,6 +341,15 @@ void add_compare_command(CLI::App& app) {
       if (!side->implausible.empty())
         std::cout << fmt::format("  {}: NOT A TYRE'S CURVE: {}\n", side->label,
                                  fmt::join(side->implausible, "; "));
+    if (scaling)
+      std::cout << fmt::format(
+          "MF 6.1 scaling factors of {} relative to a file fitted to {} (RMS {:.2f} % of peak "
+          "scaled, {:.2f} % unscaled):\n{}",
+          a.label, b.label, scaling->rig.rms_pct_peak, scaling->rig.unscaled_rms_pct_peak,
+          factors_text(scaling->rig));
+    if (scaling && !b.implausible.empty())
+      std::cout << fmt::format("  ({}'s curve is not a tyre's: the factors compare instruments)\n",
+                               b.label);
   });
 }
 

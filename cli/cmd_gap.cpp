@@ -15,6 +15,7 @@
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
 #include "cli/recording.hpp"
+#include "cli/tyre_report.hpp"
 #include "core/event_json.hpp"
 #include "core/gap/bench_model.hpp"
 #include "core/gap/gap.hpp"
@@ -290,7 +291,8 @@ void add_gap_command(CLI::App& app) {
       pipeline::Event event;
       pipeline::Calibration calibration;
     };
-    auto load = [&](const std::vector<std::string>& files, bool pool) {
+    auto load = [&](const std::vector<std::string>& files, bool pool,
+                    std::vector<tyre::TyreCurve>& curves) {
       std::vector<Usable> usable;
       for (const auto& f : files) {
         const Run run = process_run(f, o->run, nullptr);
@@ -300,6 +302,8 @@ void add_gap_command(CLI::App& app) {
             leave_out(left_out, run, e.event, flagged_reason(e.event));
             continue;
           }
+          curves.push_back(tyre_curve(fmt::format("{} event {}", f, e.event.event_id), e.curve,
+                                      run.calibration, e.results));
           usable.push_back(
               {run.path,
                fmt::format("{}#{}", std::filesystem::path(f).stem().string(), e.event.event_id),
@@ -330,8 +334,10 @@ void add_gap_command(CLI::App& app) {
       return runs;
     };
     std::vector<gap::Run> roller_runs;
-    std::vector<gap::Run> runs = transfer ? load(o->road, false) : load(o->files, true);
-    if (transfer) roller_runs = load(o->roller, true);
+    std::vector<tyre::TyreCurve> curves, roller_curves;
+    std::vector<gap::Run> runs =
+        transfer ? load(o->road, false, curves) : load(o->files, true, curves);
+    if (transfer) roller_runs = load(o->roller, true, roller_curves);
     if (!transfer && runs.size() < 2)
       // One file with one event is a usage slip; files whose events were left out are data.
       throw ExitError(o->files.size() < 2 ? kExitUsage : kExitDataError,
@@ -373,9 +379,17 @@ void add_gap_command(CLI::App& app) {
     const gap::Report rep =
         transfer ? gap::diagnose_transfer(roller_runs, runs, seed.params, gap_options)
                  : gap::diagnose(runs, seed.params, gap_options);
-    const auto doc =
+    auto doc =
         report_json(rep, runs, roller_runs, left_out, model.hash,
                     transfer ? "roller_vs_road" : "model_vs_measurement", condition, gap_options);
+    // Roller vs road in the terms a tyre file carries: the roller's MF 6.1 scaling factors
+    // against a file fitted to the road runs.
+    std::optional<RigScaling> scaling;
+    if (transfer) {
+      scaling = rig_relative_to(roller_curves, curves);
+      doc["mf61_scaling"] =
+          scaling ? rig_scaling_json(*scaling, "roller", "road") : nlohmann::ordered_json(nullptr);
+    }
     if (!o->bench_model.empty()) {
       if (transfer)
         throw ExitError(kExitUsage,
@@ -426,6 +440,12 @@ void add_gap_command(CLI::App& app) {
       }
     }
     for (const auto& n : rep.notes) std::cout << "note: " << n << "\n";
+    if (scaling)
+      std::cout << fmt::format(
+          "the roller as MF 6.1 scaling factors of a file fitted to the road runs (RMS {:.2f} % of "
+          "peak scaled, {:.2f} % unscaled):\n{}",
+          scaling->rig.rms_pct_peak, scaling->rig.unscaled_rms_pct_peak,
+          factors_text(scaling->rig));
   });
 }
 

@@ -14,6 +14,7 @@
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
 #include "cli/recording.hpp"
+#include "cli/tyre_report.hpp"
 #include "core/curve_csv.hpp"
 #include "core/event_json.hpp"
 #include "core/pipeline/event_csv.hpp"
@@ -55,19 +56,15 @@ void load(const std::string& path, const RunOptions& ro, const Model& model, dou
                   fmt::format("no tyre points: {}", fmt::join(e.tyre_notes, "; ")));
         continue;
       }
-      tyre::TyreCurve tc;
-      tc.source = fmt::format("{} event {}", path, e.event.event_id);
-      tc.curve = tyre_basis ? e.tyre_curve : e.curve;
-      for (const auto& r : tyre_basis ? e.tyre_results : e.results)
-        if (r.method == Method::Lm) tc.pac96 = r.params;
-      const auto& cal = run.calibration;
-      tc.op = {cal.wheel_load_n, cal.tyre_pressure_bar * 1e5, cal.speed_kmh / 3.6};
+      tyre::TyreCurve tc = tyre_curve(fmt::format("{} event {}", path, e.event.event_id),
+                                      tyre_basis ? e.tyre_curve : e.curve, run.calibration,
+                                      tyre_basis ? e.tyre_results : e.results);
       if (tc.curve.size() < kMinCurvePoints) {
         leave_out(out.left_out, run, e.event,
                   fmt::format("{} points, a curve needs {}", tc.curve.size(), kMinCurvePoints));
         continue;
       }
-      out.wheel_radius_m = cal.wheel_radius_m;
+      out.wheel_radius_m = run.calibration.wheel_radius_m;
       out.curves.push_back(std::move(tc));
     }
     return;
@@ -94,61 +91,6 @@ void load(const std::string& path, const RunOptions& ro, const Model& model, dou
   tc.op = {cc.wheel_load_n, p_bar * 1e5, v_kmh / 3.6};
   if (!std::isnan(cc.wheel_radius_m)) out.wheel_radius_m = cc.wheel_radius_m;
   out.curves.push_back(std::move(tc));
-}
-
-nlohmann::ordered_json curves_json(const std::vector<tyre::CurveFit>& curves) {
-  auto a = nlohmann::ordered_json::array();
-  for (const auto& c : curves)
-    a.push_back({{"source", c.source},
-                 {"wheel_load_n", c.op.fz_n},
-                 {"tyre_pressure_bar", c.op.pressure_pa / 1e5},
-                 {"speed_kmh", c.op.speed_mps * 3.6},
-                 {"points", c.points},
-                 {"max_slip_ratio", c.max_slip_ratio},
-                 {"peak_force_n", c.peak_force_n},
-                 {"rms_pct_peak", c.rms_pct_peak}});
-  return a;
-}
-
-nlohmann::ordered_json fit_json(const tyre::Mf61FitResult& fit) {
-  nlohmann::ordered_json j;
-  j["reference"] = {{"fnomin_n", fit.tyre.ref.fnomin_n},
-                    {"nompres_pa", fit.tyre.ref.nompres_pa},
-                    {"longvl_mps", fit.tyre.ref.longvl_mps}};
-  j["conditions"] = {{"loads", fit.loads}, {"pressures", fit.pressures}, {"speeds", fit.speeds}};
-  auto coefs = nlohmann::ordered_json::array();
-  for (std::size_t i = 0; i < tyre::kCoefCount; ++i) {
-    nlohmann::ordered_json c{{"name", tyre::coef_name(i)}, {"value", fit.tyre.coef[i]}};
-    std::string reason;
-    for (const auto& h : fit.held)
-      if (h.index == i) reason = h.reason;
-    c["status"] = reason.empty() ? "fitted" : "held";
-    c["stderr"] = num(fit.stderr_[i]);
-    c["reason"] = reason.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(reason);
-    coefs.push_back(c);
-  }
-  j["coefficients"] = coefs;
-  j["at_bound"] = fit.at_bound;
-  j["rms_pct_peak"] = fit.rms_pct_peak;
-  j["curves"] = curves_json(fit.curves);
-  j["solves"] = fit.solves;
-  j["converged"] = fit.converged;
-  return j;
-}
-
-nlohmann::ordered_json scaling_json(const tyre::ScalingFit& s) {
-  auto a = nlohmann::ordered_json::array();
-  for (std::size_t i = 0; i < tyre::kScalingNames.size(); ++i)
-    a.push_back({{"name", tyre::kScalingNames[i]},
-                 {"value", s.value[i]},
-                 {"stderr", num(s.stderr_[i])},
-                 {"status", s.held_reason[i].empty() ? "fitted" : "held"},
-                 {"reason", s.held_reason[i].empty() ? nlohmann::ordered_json()
-                                                     : nlohmann::ordered_json(s.held_reason[i])}});
-  return {{"factors", a},
-          {"rms_pct_peak", s.rms_pct_peak},
-          {"unscaled_rms_pct_peak", s.unscaled_rms_pct_peak},
-          {"curves", curves_json(s.curves)}};
 }
 
 void print_table(const tyre::Mf61FitResult& fit) {
@@ -268,7 +210,7 @@ void add_tyre_command(CLI::App& app) {
       j["basis"] = o->bench_model.empty() ? "instrument" : "tyre";
       j["fit"] = fit_json(fit);
       j["fit_seconds"] = fit_s;
-      if (scaling) j["scaling"] = scaling_json(*scaling);
+      if (scaling) j["scaling"] = factors_json(*scaling);
       j["notes"] = tyre_in.notes;
       j["left_out"] = left_out_json(left_out);
       std::cout << j.dump() << "\n";
@@ -279,13 +221,7 @@ void add_tyre_command(CLI::App& app) {
             "The rig relative to the file ({} curves): RMS {:.2f} % of peak ({:.2f} % "
             "unscaled)\n",
             scaling->curves.size(), scaling->rms_pct_peak, scaling->unscaled_rms_pct_peak);
-        for (std::size_t i = 0; i < tyre::kScalingNames.size(); ++i)
-          if (scaling->held_reason[i].empty())
-            fmt::print("  {:<5} {:>8.4f}  +- {:.3g}\n", tyre::kScalingNames[i], scaling->value[i],
-                       scaling->stderr_[i]);
-          else
-            fmt::print("  {:<5} {:>8.4f}  held: {}\n", tyre::kScalingNames[i], scaling->value[i],
-                       scaling->held_reason[i]);
+        fmt::print("{}", factors_text(*scaling));
       }
       fmt::print("wrote {}\n", o->out);
     }

@@ -195,8 +195,12 @@ class Gap(unittest.TestCase):
             self.assertTrue(e["stage"] == "alone" or e["stage"].startswith("forward selection"))
             self.assertTrue(e["decision"], e)
             self.assertEqual(e["accepted"], e["decision"].startswith(("accepted", "found")), e)
+        sc = doc["mf61_scaling"]
+        self.assertEqual([f["name"] for f in sc["factors"]], ["LMUX", "LKX", "LCX", "LEX"])
+        self.assertLess(sc["rms_pct_peak"], sc["unscaled_rms_pct_peak"])
         table = run("gap", "--roller", *roller, "--road", *road).stdout
         self.assertIn("each effect alone against the baseline:", table)
+        self.assertRegex(table, r"MF 6.1 scaling factors.*\n  LMUX +[0-9.]+  \+- ")
         self.assertRegex(table, r"effect\s+parameters\s+gain\s+dBIC\s+decision")
         # The ground runs were simulated with load transfer and a road 1/0.85 grippier than the
         # rollers: one of those closes most of the gap on withheld road runs.

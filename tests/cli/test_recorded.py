@@ -162,6 +162,16 @@ class ExportAndCompare(unittest.TestCase):
         self.assertEqual(doc["b"]["files"], road)
         self.assertEqual(doc["a"]["label"], "roller (3 runs)")
         self.assertEqual(doc["a"]["events"], 3)
+        # The roller against an MF 6.1 file fitted to the road, as MF scaling factors.
+        sc = doc["mf61_scaling"]
+        self.assertEqual((sc["rig"], sc["reference"]), ("roller (3 runs)", "road (3 runs)"))
+        factors = {f["name"]: f for f in sc["factors"]}
+        self.assertEqual(list(factors), ["LMUX", "LKX", "LCX", "LEX"])
+        self.assertEqual(factors["LMUX"]["status"], "fitted")
+        self.assertGreater(factors["LMUX"]["stderr"], 0)
+        for f in factors.values():
+            self.assertEqual(f["status"] == "held", bool(f["reason"]), f)
+        self.assertLess(sc["rms_pct_peak"], sc["unscaled_rms_pct_peak"])
         # The same runs as one directory per side give the same pooled fit.
         with tempfile.TemporaryDirectory() as d:
             for side, files in (("r", roller), ("g", road)):
