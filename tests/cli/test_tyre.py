@@ -183,6 +183,20 @@ class TyreFromRecordings(unittest.TestCase):
             self.assertIn("! input: scaling from: " + roller[0], text)
 
 
+class SynthFromATyreFile(unittest.TestCase):
+    def test_synth_draws_the_files_force_at_its_load_and_pressure(self):
+        tir_path = os.path.join(ROOT, "sim", "second", "tyres", "car_225_50r17.tir")
+        r = run("synth", "--tir", tir_path, "--wheel-load-n", "3000", "--tyre-pressure-bar",
+                "2.6", "--points", "20")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("# wheel_load_n=3000\n# tyre_pressure_bar=2.6\n", r.stdout)
+        rows = [ln.split(",") for ln in r.stdout.splitlines() if ln[:1].isdigit()]
+        self.assertEqual(len(rows), 20)
+        c = coefs_of(read_tir(tir_path))
+        for s, f in rows:
+            self.assertAlmostEqual(float(f), braking_force(c, float(s), 3000, 2.6e5), delta=0.01)
+
+
 class TyreBadInput(unittest.TestCase):
     def test_a_curve_without_its_load_is_refused_naming_the_file(self):
         with tempfile.TemporaryDirectory() as d:

@@ -168,6 +168,40 @@ TEST(TyreFit, ARigsFrictionScaleIsFoundAsLmux) {
   EXPECT_NEAR(read_back(tir).lmux, s.value[0], 1e-6);
 }
 
+TEST(TyreFit, TwoSpeedsIdentifyTheSlipSpeedDecay) {
+  // MF 6.1's LMUV lowers friction with slip speed |kappa| V; at one speed it is the curve's shape,
+  // at 5 and 40 km/h it is measured.
+  const auto& truth = sim2::tyre_library()[1];
+  const double lmuv = 1.5;
+  std::mt19937_64 rng(21);
+  std::normal_distribution<double> n01;
+  std::vector<tyre::TyreCurve> curves;
+  for (double l : {0.6, 1.0, 1.4})
+    for (double v_kmh : {5.0, 40.0}) {
+      tyre::TyreCurve tc;
+      tc.source = fmt::format("Fz {} v {}", l, v_kmh);
+      tc.op = {l * truth.fnomin_n, truth.nompres_pa, v_kmh / 3.6};
+      for (int k = 1; k <= 200; ++k) {
+        const double s = k / 200.0;
+        sim2::Contact c;
+        c.fz_n = tc.op.fz_n;
+        c.pressure_pa = tc.op.pressure_pa;
+        c.lmuv = lmuv;
+        c.slip_speed_mps = s * tc.op.speed_mps;
+        tc.curve.slip_ratio.push_back(s);
+        tc.curve.force_n.push_back(sim2::mf61_braking_force_n(truth, s, c));
+      }
+      const double peak = tc.curve.peak_abs_force_n();
+      for (auto& f : tc.curve.force_n) f += 0.01 * peak * n01(rng);
+      curves.push_back(std::move(tc));
+    }
+  const tyre::Mf61FitResult fit = tyre::fit_mf61(curves);
+  const auto i = static_cast<std::size_t>(tyre::Coef::LMUV);
+  ASSERT_FALSE(fit.held_at(i));
+  EXPECT_NEAR(fit.tyre.coef[i], lmuv, 0.15 * lmuv);
+  EXPECT_EQ(fit.speeds, 2u);
+}
+
 TEST(TyreFit, BadCurvesAreRefusedNamingTheCurve) {
   tyre::TyreCurve tc;
   tc.source = "few.csv";
