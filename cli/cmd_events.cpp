@@ -11,6 +11,7 @@
 #include "cli/io.hpp"
 #include "core/pipeline/event_csv.hpp"
 #include "daemon/store.hpp"
+#include "fleet/sync.hpp"
 
 namespace brakefit::cli {
 
@@ -75,6 +76,10 @@ void add_events_command(CLI::App& app) {
   list->callback([o] {
     auto s = open_store(o->db);
     const auto events = s->list(o->limit);
+    // brakefit sync's status beside the store, when a sync runs for it.
+    if (const std::string sync = fleet::status_line(fleet::default_status_path(o->db));
+        !o->json && !sync.empty())
+      std::cout << sync << "\n";
     if (!o->json)
       std::cout << fmt::format("{:>6}  {:<20}  {:<16}  {:<6}  {:<15}  {:<14}  {:>5}  {}\n", "id",
                                "created (UTC)", "vehicle", "bench", "end", "flags", "pts",

@@ -15,5 +15,7 @@ void add_compare_command(CLI::App& app);
 void add_events_command(CLI::App& app);
 void add_gap_command(CLI::App& app);
 void add_tyre_command(CLI::App& app);
+void add_sync_command(CLI::App& app);
+void add_fleet_command(CLI::App& app);
 
 }  // namespace brakefit::cli

@@ -85,6 +85,8 @@ int run(int argc, char** argv) {
   brakefit::cli::add_events_command(app);
   brakefit::cli::add_gap_command(app);
   brakefit::cli::add_tyre_command(app);
+  brakefit::cli::add_sync_command(app);
+  brakefit::cli::add_fleet_command(app);
   if (const auto unknown = unknown_subcommand(app, argc, argv)) {
     std::cerr << "brakefit: error: " << *unknown << "\n";
     return brakefit::kExitUsage;

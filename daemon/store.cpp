@@ -100,12 +100,13 @@ StoredEvent row(const Stmt& st) {
   e.samples_stored = sqlite3_column_int(st.s, 12) != 0;
   e.calibration_toml = st.col_text(13);
   e.result_json = st.col_text(14);
+  e.uid = st.col_text(15);
   return e;
 }
 
 constexpr const char* kCols =
     "id, created_unix_s, source, vehicle_id, pipeline_event_id, bench, t_start_ns, t_end_ns, "
-    "end_reason, flags, points, model_hash, samples_stored, calibration_toml, result_json";
+    "end_reason, flags, points, model_hash, samples_stored, calibration_toml, result_json, uid";
 
 /// SQLite says only "unable to open database file"; the system's reason is found first.
 void check_path(const std::string& path, bool read_only) {
@@ -341,6 +342,38 @@ std::vector<StoredEvent> EventStore::list(int limit) const {
   std::vector<StoredEvent> out;
   while (sqlite3_step(st.s) == SQLITE_ROW) out.push_back(row(st));
   return out;
+}
+
+std::vector<StoredEvent> EventStore::after(std::int64_t after_id, std::int64_t min_created_unix_s,
+                                           int limit) const {
+  Stmt st(db_, fmt::format("SELECT {} FROM events WHERE id > ? AND created_unix_s >= ? ORDER BY id "
+                           "LIMIT ?",
+                           kCols)
+                   .c_str());
+  st.i64(1, after_id);
+  st.i64(2, min_created_unix_s);
+  st.i64(3, limit);
+  std::vector<StoredEvent> out;
+  while (sqlite3_step(st.s) == SQLITE_ROW) out.push_back(row(st));
+  return out;
+}
+
+std::int64_t EventStore::count_after(std::int64_t after_id, std::int64_t min_created_unix_s) const {
+  Stmt st(db_, "SELECT COUNT(*) FROM events WHERE id > ? AND created_unix_s >= ?");
+  st.i64(1, after_id);
+  st.i64(2, min_created_unix_s);
+  sqlite3_step(st.s);
+  return sqlite3_column_int64(st.s, 0);
+}
+
+std::string EventStore::samples_blob(std::int64_t id, std::int64_t* count) const {
+  Stmt st(db_, "SELECT data, count FROM samples WHERE event_id = ?");
+  st.i64(1, id);
+  if (sqlite3_step(st.s) != SQLITE_ROW) return {};
+  if (count) *count = sqlite3_column_int64(st.s, 1);
+  const auto* p = static_cast<const char*>(sqlite3_column_blob(st.s, 0));
+  return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(st.s, 0)))
+           : std::string();
 }
 
 std::optional<StoredEvent> EventStore::get(std::int64_t id) const {

@@ -30,6 +30,7 @@ struct StoredEvent {
   bool samples_stored = false;
   std::string calibration_toml;
   std::string result_json;  ///< brakefit.event/1 document
+  std::string uid;          ///< random, made once per event (empty: a row from before uids)
 };
 
 class EventStore {
@@ -60,6 +61,13 @@ class EventStore {
   int apply_retention(std::int64_t now_unix_s);
   std::vector<StoredEvent> list(int limit) const;
   std::optional<StoredEvent> get(std::int64_t id) const;
+  /// Events with a row id above after_id, committed at or after min_created_unix_s, oldest
+  /// first (what `brakefit sync` ships next).
+  std::vector<StoredEvent> after(std::int64_t after_id, std::int64_t min_created_unix_s,
+                                 int limit) const;
+  std::int64_t count_after(std::int64_t after_id, std::int64_t min_created_unix_s) const;
+  /// An event's raw samples as stored (the packed blob; empty when none), and their count.
+  std::string samples_blob(std::int64_t id, std::int64_t* count = nullptr) const;
   std::vector<pipeline::Sample> samples(std::int64_t id) const;
   std::int64_t count() const;
   /// "ok" or SQLite's integrity_check report.

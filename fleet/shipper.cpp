@@ -1,0 +1,129 @@
+#include "fleet/shipper.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <ctime>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "core/pipeline/calibration.hpp"
+
+namespace brakefit::fleet {
+
+namespace {
+
+constexpr std::size_t kColumns = 20;
+
+PgParam maybe(double v) {
+  return std::isfinite(v) ? PgParam::text(fmt::format("{:.17g}", v)) : PgParam::null();
+}
+
+}  // namespace
+
+std::int64_t resume_unix_s(Pg& pg, const StationIds& ids) {
+  const PgResult r = pg.exec(
+      "SELECT COALESCE(EXTRACT(EPOCH FROM max(created_at))::bigint, 0) FROM brakefit.events "
+      "WHERE station_id = $1 AND lane_id = $2",
+      {PgParam::text(ids.station), PgParam::text(ids.lane)});
+  const std::int64_t newest = std::stoll(r.text(0, 0));
+  return newest > 0 ? std::max<std::int64_t>(0, newest - kResumeMarginS) : 0;
+}
+
+std::string uid_of(const daemon::StoredEvent& e) {
+  if (!e.uid.empty()) return e.uid;
+  return fmt::format("legacy:{}:{}:{}:{}", e.source, e.t_start_ns, e.pipeline_event_id,
+                     e.created_unix_s);
+}
+
+EventFigures figures_of(const daemon::StoredEvent& e) {
+  EventFigures f;
+  try {
+    f.wheel_load_n = pipeline::parse_calibration(e.calibration_toml, "calibration").wheel_load_n;
+  } catch (const std::exception&) {
+    // A calibration this version cannot read: the event still ships, without the figures.
+  }
+  const auto j = nlohmann::json::parse(e.result_json, nullptr, false);
+  if (j.is_discarded() || !j.contains("results")) return f;
+  const nlohmann::json* pick = nullptr;
+  for (const char* m : {"hybrid", "lm"}) {
+    for (const auto& r : j["results"])
+      if (r.value("method", "") == m && r["D"].is_number()) {
+        pick = &r;
+        break;
+      }
+    if (pick) break;
+  }
+  if (!pick) return f;
+  f.method = (*pick)["method"].get<std::string>();
+  const double b = (*pick)["B"].is_number() ? (*pick)["B"].get<double>() : NAN;
+  const double c = (*pick)["C"].is_number() ? (*pick)["C"].get<double>() : NAN;
+  const double d = (*pick)["D"].get<double>();
+  if (f.wheel_load_n > 0) f.peak_friction = d / f.wheel_load_n;
+  f.slip_stiffness_n = b * c * d;
+  return f;
+}
+
+BatchOutcome ship_batch(Pg& pg, const StationIds& ids,
+                        const std::vector<daemon::StoredEvent>& events,
+                        const daemon::EventStore& store, bool with_samples) {
+  BatchOutcome out;
+  if (events.empty()) return out;
+  // The months' partitions first, each in its own short statement: creating one locks the
+  // parent table, which must not wait on this batch's insert.
+  std::set<std::pair<int, int>> months;
+  for (const auto& e : events) {
+    const auto t = static_cast<std::time_t>(e.created_unix_s);
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    if (months.insert({tm.tm_year, tm.tm_mon}).second)
+      pg.exec("SELECT brakefit.ensure_month(to_timestamp($1))",
+              {PgParam::text(std::to_string(e.created_unix_s))});
+  }
+  std::string sql =
+      "INSERT INTO brakefit.events (station_id, lane_id, event_uid, created_at, store_row_id, "
+      "source, vehicle_id, bench, end_reason, flags, points, model_hash, calibration_toml, result, "
+      "wheel_load_n, peak_friction, slip_stiffness_n, fit_method, samples, samples_count) VALUES ";
+  std::vector<PgParam> params;
+  params.reserve(events.size() * kColumns);
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    const auto& e = events[i];
+    const EventFigures f = figures_of(e);
+    std::int64_t count = 0;
+    std::string blob = with_samples && e.samples_stored ? store.samples_blob(e.id, &count) : "";
+    const std::size_t b = params.size();
+    sql += fmt::format(
+        "{}(${},${},${},to_timestamp(${}),${},${},${},${},${},${},${},${},${},${}::jsonb,${},${},"
+        "${},${},${},${})",
+        i ? "," : "", b + 1, b + 2, b + 3, b + 4, b + 5, b + 6, b + 7, b + 8, b + 9, b + 10, b + 11,
+        b + 12, b + 13, b + 14, b + 15, b + 16, b + 17, b + 18, b + 19, b + 20);
+    params.push_back(PgParam::text(ids.station));
+    params.push_back(PgParam::text(ids.lane));
+    params.push_back(PgParam::text(uid_of(e)));
+    params.push_back(PgParam::text(std::to_string(e.created_unix_s)));
+    params.push_back(PgParam::text(std::to_string(e.id)));
+    params.push_back(PgParam::text(e.source));
+    params.push_back(PgParam::text(e.vehicle_id));
+    params.push_back(PgParam::text(e.bench));
+    params.push_back(PgParam::text(e.end_reason));
+    params.push_back(PgParam::text(e.flags));
+    params.push_back(PgParam::text(std::to_string(e.points)));
+    params.push_back(PgParam::text(e.model_hash));
+    params.push_back(PgParam::text(e.calibration_toml));
+    params.push_back(PgParam::text(e.result_json));
+    params.push_back(maybe(f.wheel_load_n));
+    params.push_back(maybe(f.peak_friction));
+    params.push_back(maybe(f.slip_stiffness_n));
+    params.push_back(f.method.empty() ? PgParam::null() : PgParam::text(f.method));
+    params.push_back(blob.empty() ? PgParam::null() : PgParam::bytes(std::move(blob)));
+    params.push_back(count > 0 ? PgParam::text(std::to_string(count)) : PgParam::null());
+    out.last_row_id = e.id;
+  }
+  sql += " ON CONFLICT (event_uid, created_at) DO NOTHING";
+  const PgResult r = pg.exec(sql, params);
+  out.sent = events.size();
+  out.inserted = static_cast<std::size_t>(r.affected());
+  return out;
+}
+
+}  // namespace brakefit::fleet
