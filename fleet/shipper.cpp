@@ -90,7 +90,8 @@ BatchOutcome ship_batch(Pg& pg, const StationIds& ids,
     const auto& e = events[i];
     const EventFigures f = figures_of(e);
     std::int64_t count = 0;
-    std::string blob = with_samples && e.samples_stored ? store.samples_blob(e.id, &count) : "";
+    const std::string blob =
+        with_samples && e.samples_stored ? store.samples_blob(e.id, &count) : "";
     const std::size_t b = params.size();
     sql += fmt::format(
         "{}(${},${},${},to_timestamp(${}),${},${},${},${},${},${},${},${},${},${}::jsonb,${},${},"
@@ -115,7 +116,7 @@ BatchOutcome ship_batch(Pg& pg, const StationIds& ids,
     params.push_back(maybe(f.peak_friction));
     params.push_back(maybe(f.slip_stiffness_n));
     params.push_back(f.method.empty() ? PgParam::null() : PgParam::text(f.method));
-    params.push_back(blob.empty() ? PgParam::null() : PgParam::bytes(std::move(blob)));
+    params.push_back(blob.empty() ? PgParam::null() : PgParam::bytes(blob));
     params.push_back(count > 0 ? PgParam::text(std::to_string(count)) : PgParam::null());
     out.last_row_id = e.id;
   }

@@ -349,6 +349,7 @@ class DaemonTest(unittest.TestCase):
                              env=dict(os.environ, DESTDIR=dest), capture_output=True, text=True)
         self.assertEqual(out.returncode, 0, out.stderr)
         for p in ("usr/sbin/brakefitd", "usr/bin/brakefit", "lib/systemd/system/brakefitd.service",
+                  "lib/systemd/system/brakefit-sync.service",
                   "etc/brakefit/brakefitd.toml", "lib/udev/rules.d/60-brakefit.rules",
                   "usr/lib/tmpfiles.d/brakefit.conf", "usr/share/brakefit/models/default.json",
                   "usr/share/brakefit/modbus_registers.csv"):

@@ -9,6 +9,7 @@ with new uids and earlier commit times (one every ten minutes): the rows are wha
 the volume is the test's."""
 import json
 import os
+import re
 import shutil
 import signal
 import sqlite3
@@ -196,7 +197,7 @@ class Station:
 class Shipping(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.north = Station("north")
+        cls.north = Station("north", lane="s1")  # lane 1 is the README's
         replay_into(cls.north.store, ["roller_2p2bar_fast.log", "ground_2p2bar_150barps.log"])
         age_rows(cls.north.store, 3 * 86400)
         clone_rows(cls.north.store, 120, newest_age_s=7200)
@@ -209,8 +210,8 @@ class Shipping(unittest.TestCase):
         self.assertEqual(st["schema"], "brakefit.sync_status/1")
         self.assertEqual((st["state"], st["backlog"], st["shipped"]), ("idle", 0, 122))
         # The real events carry their raw samples and the figures the report keys on.
-        self.assertEqual(central("north", "count(samples)"), "2")
-        self.assertEqual(central("north", "count(peak_friction)"), "122")
+        self.assertEqual(central("north", "count(samples)", lane="s1"), "2")
+        self.assertEqual(central("north", "count(peak_friction)", lane="s1"), "122")
         r = self.north.once()
         self.assertEqual(r.returncode, 0, r.stderr)
         self.north.assert_exactly_once(self)
@@ -244,11 +245,34 @@ class Shipping(unittest.TestCase):
         db.commit()
         db.close()
         os.replace(rebuilt, self.north.store)
-        before = int(central("north"))
+        before = int(central("north", lane="s1"))
         r = self.north.once()
         self.assertEqual(r.returncode, 0, r.stderr)
-        self.assertEqual(int(central("north")), before)
+        self.assertEqual(int(central("north", lane="s1")), before)
         self.north.assert_exactly_once(self)
+
+
+class ReadmeFleetLines(unittest.TestCase):
+    def test_the_readmes_central_server_commands_run_as_written(self):
+        with open(os.path.join(ROOT, "README.md"), encoding="utf-8") as f:
+            lines = [ln[4:] for ln in f.read().splitlines()
+                     if re.match(r"    brakefit (fleet|sync) ", ln)]
+        self.assertEqual(len(lines), 4, lines)
+        d = tempfile.mkdtemp(dir=TMP)
+        os.makedirs(os.path.join(d, "out", "daemon"))
+        replay_into(os.path.join(d, "out", "daemon", "events.db"), ["roller_2p2bar_fast.log"])
+        shutil.copy(SERVER.ca, os.path.join(d, "fleet-ca.crt"))
+        # The same password the other tests' north station uses (add-station sets it again).
+        shutil.copy(os.path.join(TMP, "station_north.pw"), os.path.join(d, "station_north.pw"))
+        # A URL without a host or port takes libpq's PGHOST and PGPORT: the test's server.
+        env = dict(os.environ, PGHOST=SERVER.sock, PGPORT=str(SERVER.port),
+                   PATH=os.pathsep.join([os.path.dirname(CLI), os.environ["PATH"]]))
+        env.pop("BRAKEFIT_FLEET_PASSWORD", None)
+        for cmd in lines:
+            r = subprocess.run(["bash", "-c", cmd], cwd=d, env=env, capture_output=True,
+                               text=True, timeout=120)
+            self.assertEqual(r.returncode, 0, f"{cmd}\n{r.stderr[-2000:]}")
+        self.assertTrue(os.path.exists(os.path.join(d, "out", "fleet", "index.html")))
 
 
 class Security(unittest.TestCase):
@@ -357,11 +381,19 @@ class Faults(unittest.TestCase):
 
     def test_kill_9_mid_batch_loses_and_duplicates_nothing(self):
         clone_rows(self.s.store, 3000)
+        # 50 ms a statement: the 150 batches take long enough to be killed in the middle of.
+        SERVER.psql("CREATE FUNCTION brakefit.slow() RETURNS trigger LANGUAGE plpgsql AS $$ "
+                    "BEGIN PERFORM pg_sleep(0.05); RETURN NULL; END $$; "
+                    "CREATE TRIGGER slow BEFORE INSERT ON brakefit.events "
+                    "FOR EACH STATEMENT EXECUTE FUNCTION brakefit.slow()")
         self.s.start(extra=("--batch", "20"))
-        time.sleep(1.0)
+        end = time.time() + 30
+        while int(central("south", lane="2")) < 1000 and time.time() < end:
+            time.sleep(0.1)
         before = int(central("south", lane="2"))
         SERVER.kill9()
         SERVER.start()
+        SERVER.psql("DROP TRIGGER slow ON brakefit.events; DROP FUNCTION brakefit.slow()")
         self.s.wait_drained(timeout=120)
         self.assertGreater(int(central("south", lane="2")), before)
         self.s.stop()
@@ -398,6 +430,30 @@ class Faults(unittest.TestCase):
         self.assertNotEqual(old, SERVER.port)
         self.assertEqual(self.s.status()["shipped"], 4)
         self.s.assert_exactly_once(self)
+
+
+class SyncUnit(unittest.TestCase):
+    def test_the_sync_unit_verifies_and_is_sandboxed(self):
+        if not shutil.which("systemd-analyze"):
+            self.skipTest("systemd-analyze is not installed")
+        with open(os.path.join(ROOT, "systemd", "brakefit-sync.service")) as f:
+            unit = f.read()
+        path = os.path.join(TMP, "brakefit-sync.service")
+        with open(path, "w") as f:
+            f.write(unit.replace("/usr/bin/brakefit", CLI))
+        out = subprocess.run(["systemd-analyze", "verify", "--man=no", path], capture_output=True,
+                             text=True, cwd=TMP)
+        self.assertEqual(out.returncode, 0, out.stdout + out.stderr)
+        out = subprocess.run(["systemd-analyze", "security", "--offline=yes", path],
+                             capture_output=True, text=True, cwd=TMP)
+        m = re.search(r"Overall exposure level for brakefit-sync.service: ([\d.]+)", out.stdout)
+        self.assertIsNotNone(m, out.stdout + out.stderr)
+        self.assertLessEqual(float(m.group(1)), 2.0)
+        # Network out to the central server only; the password a credential, not an argument.
+        for key in ("IPAddressDeny=any", "LoadCredential=fleet-password:",
+                    "--password-file ${CREDENTIALS_DIRECTORY}/fleet-password", "User=brakefitd",
+                    "StateDirectory=brakefit"):
+            self.assertIn(key, unit)
 
 
 class WeeklyReport(unittest.TestCase):
