@@ -40,7 +40,6 @@ CREATE TABLE brakefit.events (
   PRIMARY KEY (event_uid, created_at)
 ) PARTITION BY RANGE (created_at);
 CREATE INDEX events_lane_time ON brakefit.events (station_id, lane_id, created_at);
-CREATE INDEX events_time ON brakefit.events (created_at);
 
 CREATE FUNCTION brakefit.my_station() RETURNS text
   LANGUAGE sql STABLE SECURITY DEFINER SET search_path = brakefit, pg_temp
@@ -53,11 +52,16 @@ DECLARE
   part text := format('events_%s', to_char(m, 'YYYY_MM'));
 BEGIN
   IF to_regclass(format('brakefit.%I', part)) IS NOT NULL THEN RETURN; END IF;
+  -- Stations opening a month at the same moment: one creates it, the others find it made (the
+  -- check above can miss a partition committed after this statement's snapshot was taken).
   PERFORM pg_advisory_xact_lock(hashtext('brakefit.ensure_month'));
-  IF to_regclass(format('brakefit.%I', part)) IS NOT NULL THEN RETURN; END IF;
-  EXECUTE format('CREATE TABLE brakefit.%I PARTITION OF brakefit.events FOR VALUES FROM (%L) TO (%L)',
-                 part, m::timestamp AT TIME ZONE 'UTC',
-                 (m + interval '1 month')::timestamp AT TIME ZONE 'UTC');
+  BEGIN
+    EXECUTE format('CREATE TABLE IF NOT EXISTS brakefit.%I PARTITION OF brakefit.events '
+                   'FOR VALUES FROM (%L) TO (%L)', part, m::timestamp AT TIME ZONE 'UTC',
+                   (m + interval '1 month')::timestamp AT TIME ZONE 'UTC');
+  EXCEPTION WHEN duplicate_table OR unique_violation THEN
+    NULL;
+  END;
 END $$;
 
 CREATE FUNCTION brakefit.add_station(station text, role text, password text) RETURNS void

@@ -38,11 +38,19 @@ std::string uid_of(const daemon::StoredEvent& e) {
 
 EventFigures figures_of(const daemon::StoredEvent& e) {
   EventFigures f;
-  try {
-    f.wheel_load_n = pipeline::parse_calibration(e.calibration_toml, "calibration").wheel_load_n;
-  } catch (const std::exception&) {
-    // A calibration this version cannot read: the event still ships, without the figures.
+  // A lane's events share their calibration: its TOML is parsed once, not per event.
+  thread_local std::string last_toml;
+  thread_local double last_load_n = NAN;
+  if (e.calibration_toml != last_toml) {
+    last_toml = e.calibration_toml;
+    try {
+      last_load_n = pipeline::parse_calibration(e.calibration_toml, "calibration").wheel_load_n;
+    } catch (const std::exception&) {
+      // A calibration this version cannot read: the event still ships, without the figures.
+      last_load_n = NAN;
+    }
   }
+  f.wheel_load_n = last_load_n;
   const auto j = nlohmann::json::parse(e.result_json, nullptr, false);
   if (j.is_discarded() || !j.contains("results")) return f;
   const nlohmann::json* pick = nullptr;

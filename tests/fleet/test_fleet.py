@@ -72,6 +72,7 @@ def run_cli(*args, env=None, timeout=120):
 def replay_into(store, recordings):
     """brakefitd replays each recording into the store (as a station's lane does), then exits."""
     d = tempfile.mkdtemp(dir=TMP)
+    logs = ""
     for rec in recordings:
         with open(os.path.join(REC, rec[:-4] + ".bench.toml")) as f:
             bench = f.read()
@@ -83,6 +84,8 @@ def replay_into(store, recordings):
                     f'[store]\npath = "{store}"\nmin_free_mb = 0\n')
         r = subprocess.run([DAEMON, "--config", cfg], capture_output=True, text=True, timeout=120)
         assert r.returncode == 0, r.stderr[-2000:]
+        logs += r.stderr
+    return logs
 
 
 def clone_rows(store, n, *, friction_factor=1.0, newest_age_s=0, step_s=600):
@@ -275,6 +278,38 @@ class ReadmeFleetLines(unittest.TestCase):
         self.assertTrue(os.path.exists(os.path.join(d, "out", "fleet", "index.html")))
 
 
+class NewMonth(unittest.TestCase):
+    def test_stations_opening_a_month_at_the_same_moment_all_ship(self):
+        template = os.path.join(TMP, "month.db")
+        replay_into(template, ["roller_1p0bar_fast.log"])
+        age_rows(template, 400 * 86400)  # a month no partition exists for yet
+        stations = []
+        for i in range(6):
+            st = Station("south", lane=f"m{i}")
+            shutil.copy(template, st.store)
+            db = sqlite3.connect(st.store)
+            db.execute("UPDATE events SET uid = ?", (uuid.uuid4().hex,))
+            db.commit()
+            db.close()
+            stations.append(st)
+        # The month's creator is held back while all six arrive: they all find no partition, then
+        # meet at its creation.
+        holder = subprocess.Popen(
+            ["runuser", "-u", "postgres", "--", "psql", "-X", "-q", "-h", SERVER.sock, "-p",
+             str(SERVER.port), "-d", "brakefit", "-c",
+             "SELECT pg_advisory_lock(hashtext('brakefit.ensure_month')), pg_sleep(3)"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(0.5)
+        procs = [subprocess.Popen([CLI, *st.args(extra=("--once",))], stderr=subprocess.PIPE,
+                                  text=True) for st in stations]
+        holder.wait(timeout=30)
+        for p in procs:
+            _, err = p.communicate(timeout=60)
+            self.assertEqual(p.returncode, 0, err)
+        for st in stations:
+            st.assert_exactly_once(self)
+
+
 class Security(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -397,6 +432,20 @@ class Faults(unittest.TestCase):
         self.s.wait_drained(timeout=120)
         self.assertGreater(int(central("south", lane="2")), before)
         self.s.stop()
+        self.s.assert_exactly_once(self)
+
+    def test_brakefitd_commits_while_the_sync_reads_its_store(self):
+        clone_rows(self.s.store, 2000)
+        self.s.start(extra=("--batch", "10"))
+        time.sleep(0.3)
+        before = len(store_uids(self.s.store))
+        # A real brakefitd storing an event into the store the sync is reading from.
+        log = replay_into(self.s.store, ["roller_1p0bar_slow.log"])
+        self.assertEqual(len(store_uids(self.s.store)), before + 1)
+        self.assertNotIn("locked", log)
+        self.assertNotIn("busy", log)
+        self.s.wait_drained()
+        self.assertEqual(self.s.stop(), 0)
         self.s.assert_exactly_once(self)
 
     def test_a_slow_server_still_takes_the_batch(self):
