@@ -90,9 +90,10 @@ GRANT SELECT, INSERT ON brakefit.events TO brakefit_station;
 GRANT EXECUTE ON FUNCTION brakefit.my_station(), brakefit.ensure_month(timestamptz)
   TO brakefit_station;
 ALTER TABLE brakefit.events ENABLE ROW LEVEL SECURITY;
+-- (SELECT ...): evaluated once a statement, not once a row (a batch is one statement).
 CREATE POLICY station_own_rows ON brakefit.events
-  USING (station_id = brakefit.my_station())
-  WITH CHECK (station_id = brakefit.my_station());
+  USING (station_id = (SELECT brakefit.my_station()))
+  WITH CHECK (station_id = (SELECT brakefit.my_station()));
 )sql",
 };
 

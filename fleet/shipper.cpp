@@ -4,7 +4,10 @@
 
 #include <cmath>
 #include <ctime>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <string_view>
 #include <set>
 
 #include "core/pipeline/calibration.hpp"
@@ -17,6 +20,54 @@ constexpr std::size_t kColumns = 20;
 
 PgParam maybe(double v) {
   return std::isfinite(v) ? PgParam::text(fmt::format("{:.17g}", v)) : PgParam::null();
+}
+
+struct Picked {
+  std::string method;
+  double b = NAN, c = NAN, d = NAN;
+};
+
+/// The number after `"key":` from pos on (NaN when absent or null).
+double number_after(std::string_view doc, std::string_view key, std::size_t from, std::size_t to) {
+  const std::string k = fmt::format("\"{}\":", key);
+  const std::size_t at = doc.find(k, from);
+  if (at == std::string_view::npos || at >= to) return NAN;
+  const char* p = doc.data() + at + k.size();
+  char* end = nullptr;
+  const double v = std::strtod(p, &end);
+  return end == p ? NAN : v;
+}
+
+/// The hybrid fit's (else least squares') B, C, D from a brakefit.event/1 document. The document
+/// is brakefit's own (event_json.cpp writes "method" first in each result), so the numbers are
+/// found by key after the method's entry: the full parse took most of the sync's time per event.
+std::optional<Picked> pick_parsed(std::string_view doc) {
+  const auto j = nlohmann::json::parse(doc, nullptr, false);
+  if (j.is_discarded() || !j.contains("results") || !j["results"].is_array()) return std::nullopt;
+  for (const char* m : {"hybrid", "lm"})
+    for (const auto& r : j["results"])
+      if (r.value("method", "") == m && r.contains("D") && r["D"].is_number()) {
+        auto num = [&r](const char* k) { return r[k].is_number() ? r[k].get<double>() : NAN; };
+        return Picked{m, num("B"), num("C"), num("D")};
+      }
+  return std::nullopt;
+}
+
+std::optional<Picked> pick_fit(std::string_view doc) {
+  const std::size_t results = doc.find("\"results\":[");
+  // Not brakefit's compact writing (a document edited by hand, say): the full parse.
+  if (results == std::string_view::npos) return pick_parsed(doc);
+  const std::size_t tyre = doc.find("\"tyre_results\":", results);
+  const std::size_t limit = tyre == std::string_view::npos ? doc.size() : tyre;
+  for (const char* m : {"hybrid", "lm"}) {
+    const std::size_t at = doc.find(fmt::format("{{\"method\":\"{}\"", m), results);
+    if (at == std::string_view::npos || at >= limit) continue;
+    const std::size_t next = std::min(doc.find("{\"method\":", at + 1), limit);
+    Picked p{m, number_after(doc, "B", at, next), number_after(doc, "C", at, next),
+             number_after(doc, "D", at, next)};
+    if (std::isfinite(p.d)) return p;
+  }
+  return pick_parsed(doc);
 }
 
 }  // namespace
@@ -51,24 +102,11 @@ EventFigures figures_of(const daemon::StoredEvent& e) {
     }
   }
   f.wheel_load_n = last_load_n;
-  const auto j = nlohmann::json::parse(e.result_json, nullptr, false);
-  if (j.is_discarded() || !j.contains("results")) return f;
-  const nlohmann::json* pick = nullptr;
-  for (const char* m : {"hybrid", "lm"}) {
-    for (const auto& r : j["results"])
-      if (r.value("method", "") == m && r["D"].is_number()) {
-        pick = &r;
-        break;
-      }
-    if (pick) break;
-  }
-  if (!pick) return f;
-  f.method = (*pick)["method"].get<std::string>();
-  const double b = (*pick)["B"].is_number() ? (*pick)["B"].get<double>() : NAN;
-  const double c = (*pick)["C"].is_number() ? (*pick)["C"].get<double>() : NAN;
-  const double d = (*pick)["D"].get<double>();
-  if (f.wheel_load_n > 0) f.peak_friction = d / f.wheel_load_n;
-  f.slip_stiffness_n = b * c * d;
+  const auto picked = pick_fit(e.result_json);
+  if (!picked) return f;
+  f.method = picked->method;
+  if (f.wheel_load_n > 0) f.peak_friction = picked->d / f.wheel_load_n;
+  f.slip_stiffness_n = picked->b * picked->c * picked->d;
   return f;
 }
 

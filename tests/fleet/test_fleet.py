@@ -108,7 +108,7 @@ def clone_rows(store, n, *, friction_factor=1.0, newest_age_s=0, step_s=600):
         for res in doc.get("results", []):
             if isinstance(res.get("D"), (int, float)):
                 res["D"] *= friction_factor
-        r[13] = json.dumps(doc)
+        r[13] = json.dumps(doc, separators=(",", ":"))  # as brakefitd writes it
         db.execute("INSERT INTO events (created_unix_s, source, vehicle_id, pipeline_event_id, "
                    "bench, t_start_ns, t_end_ns, end_reason, flags, points, model_hash, "
                    "samples_stored, calibration_toml, result_json, uid) VALUES "
@@ -215,6 +215,16 @@ class Shipping(unittest.TestCase):
         # The real events carry their raw samples and the figures the report keys on.
         self.assertEqual(central("north", "count(samples)", lane="s1"), "2")
         self.assertEqual(central("north", "count(peak_friction)", lane="s1"), "122")
+        # The report's figures are the hybrid fit's D / wheel load and B C D, as stored.
+        db = sqlite3.connect(self.north.store)
+        uid, doc = db.execute("SELECT uid, result_json FROM events ORDER BY id LIMIT 1").fetchone()
+        db.close()
+        hybrid = next(r for r in json.loads(doc)["results"] if r["method"] == "hybrid")
+        got = SERVER.psql(f"SELECT peak_friction, slip_stiffness_n, fit_method FROM brakefit.events "
+                          f"WHERE event_uid = '{uid}'").split("|")
+        self.assertAlmostEqual(float(got[0]), hybrid["D"] / 3800, places=9)
+        self.assertAlmostEqual(float(got[1]), hybrid["B"] * hybrid["C"] * hybrid["D"], places=3)
+        self.assertEqual(got[2], "hybrid")
         r = self.north.once()
         self.assertEqual(r.returncode, 0, r.stderr)
         self.north.assert_exactly_once(self)
