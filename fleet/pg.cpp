@@ -110,6 +110,37 @@ void Pg::exec_script(const std::string& sql) {
   checked(c_, PQexec(c_, sql.c_str()));
 }
 
+void Pg::copy_in(const std::string& copy_sql, const std::string& rows) {
+  pg_result* start = PQexec(c_, copy_sql.c_str());
+  if (!start || PQresultStatus(start) != PGRES_COPY_IN) {
+    checked(c_, start);  // throws with the server's reason
+    throw PgError("COPY did not start", "");
+  }
+  PQclear(start);
+  if (PQputCopyData(c_, rows.data(), static_cast<int>(rows.size())) != 1 ||
+      PQputCopyEnd(c_, nullptr) != 1)
+    throw PgError(fmt::format("COPY: {}", conn_error(c_)), "");
+  // The COPY's own result, then the end of the results.
+  checked(c_, PQgetResult(c_));
+  while (pg_result* more = PQgetResult(c_)) PQclear(more);
+}
+
+std::string copy_text(const std::optional<std::string>& v) {
+  if (!v) return "\\N";
+  std::string out;
+  out.reserve(v->size() + 8);
+  for (char ch : *v) {
+    switch (ch) {
+      case '\\': out += "\\\\"; break;
+      case '\t': out += "\\t"; break;
+      case '\n': out += "\\n"; break;
+      case '\r': out += "\\r"; break;
+      default: out += ch;
+    }
+  }
+  return out;
+}
+
 std::string Pg::describe() const {
   return fmt::format("{}@{}:{}/{}", PQuser(c_), PQhost(c_), PQport(c_), PQdb(c_));
 }

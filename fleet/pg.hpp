@@ -70,6 +70,8 @@ class Pg {
   PgResult exec(const std::string& sql, const std::vector<PgParam>& params = {});
   /// Several statements without parameters (migrations).
   void exec_script(const std::string& sql);
+  /// COPY ... FROM STDIN with these rows in COPY's text format (copy_text() escapes a field).
+  void copy_in(const std::string& copy_sql, const std::string& rows);
   /// The server as "user@host:port/db" (for logs).
   std::string describe() const;
   bool ssl_in_use() const;
@@ -77,6 +79,10 @@ class Pg {
  private:
   pg_conn* c_ = nullptr;
 };
+
+/// A field for COPY's text format: backslash, tab, newline and carriage return escaped; nullopt
+/// is \N.
+std::string copy_text(const std::optional<std::string>& v);
 
 /// True when the URL or key=value string carries a password (refused on a command line).
 bool carries_password(const std::string& url);

@@ -3,24 +3,18 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <ctime>
 #include <cstdlib>
+#include <ctime>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <string_view>
 #include <set>
+#include <string_view>
 
 #include "core/pipeline/calibration.hpp"
 
 namespace brakefit::fleet {
 
 namespace {
-
-constexpr std::size_t kColumns = 20;
-
-PgParam maybe(double v) {
-  return std::isfinite(v) ? PgParam::text(fmt::format("{:.17g}", v)) : PgParam::null();
-}
 
 struct Picked {
   std::string method;
@@ -126,50 +120,87 @@ BatchOutcome ship_batch(Pg& pg, const StationIds& ids,
       pg.exec("SELECT brakefit.ensure_month(to_timestamp($1))",
               {PgParam::text(std::to_string(e.created_unix_s))});
   }
-  std::string sql =
-      "INSERT INTO brakefit.events (station_id, lane_id, event_uid, created_at, store_row_id, "
-      "source, vehicle_id, bench, end_reason, flags, points, model_hash, calibration_toml, result, "
-      "wheel_load_n, peak_friction, slip_stiffness_n, fit_method, samples, samples_count) VALUES ";
-  std::vector<PgParam> params;
-  params.reserve(events.size() * kColumns);
-  for (std::size_t i = 0; i < events.size(); ++i) {
-    const auto& e = events[i];
+  // COPY into a session's temporary table, then one INSERT ... SELECT: a batch is parsed as a
+  // stream, not planned as a statement of thousands of parameters (which cost the server more
+  // than the rows themselves). BEGIN ... COMMIT makes the batch one transaction.
+  constexpr const char* kCols =
+      "station_id, lane_id, event_uid, created_at, store_row_id, source, vehicle_id, bench, "
+      "end_reason, flags, points, model_hash, calibration_toml, result, wheel_load_n, "
+      "peak_friction, slip_stiffness_n, fit_method, samples, samples_count";
+  std::string rows;
+  auto field = [&rows](const std::optional<std::string>& v, bool last = false) {
+    rows += copy_text(v);
+    rows += last ? '\n' : '\t';
+  };
+  auto number = [](double v) -> std::optional<std::string> {
+    if (!std::isfinite(v)) return std::nullopt;
+    return fmt::format("{:.17g}", v);
+  };
+  for (const auto& e : events) {
     const EventFigures f = figures_of(e);
     std::int64_t count = 0;
     const std::string blob =
-        with_samples && e.samples_stored ? store.samples_blob(e.id, &count) : "";
-    const std::size_t b = params.size();
-    sql += fmt::format(
-        "{}(${},${},${},to_timestamp(${}),${},${},${},${},${},${},${},${},${},${}::jsonb,${},${},"
-        "${},${},${},${})",
-        i ? "," : "", b + 1, b + 2, b + 3, b + 4, b + 5, b + 6, b + 7, b + 8, b + 9, b + 10, b + 11,
-        b + 12, b + 13, b + 14, b + 15, b + 16, b + 17, b + 18, b + 19, b + 20);
-    params.push_back(PgParam::text(ids.station));
-    params.push_back(PgParam::text(ids.lane));
-    params.push_back(PgParam::text(uid_of(e)));
-    params.push_back(PgParam::text(std::to_string(e.created_unix_s)));
-    params.push_back(PgParam::text(std::to_string(e.id)));
-    params.push_back(PgParam::text(e.source));
-    params.push_back(PgParam::text(e.vehicle_id));
-    params.push_back(PgParam::text(e.bench));
-    params.push_back(PgParam::text(e.end_reason));
-    params.push_back(PgParam::text(e.flags));
-    params.push_back(PgParam::text(std::to_string(e.points)));
-    params.push_back(PgParam::text(e.model_hash));
-    params.push_back(PgParam::text(e.calibration_toml));
-    params.push_back(PgParam::text(e.result_json));
-    params.push_back(maybe(f.wheel_load_n));
-    params.push_back(maybe(f.peak_friction));
-    params.push_back(maybe(f.slip_stiffness_n));
-    params.push_back(f.method.empty() ? PgParam::null() : PgParam::text(f.method));
-    params.push_back(blob.empty() ? PgParam::null() : PgParam::bytes(blob));
-    params.push_back(count > 0 ? PgParam::text(std::to_string(count)) : PgParam::null());
+        with_samples && e.samples_stored ? store.samples_blob(e.id, &count) : std::string();
+    const auto t = static_cast<std::time_t>(e.created_unix_s);
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char when[40];
+    std::strftime(when, sizeof when, "%Y-%m-%d %H:%M:%S+00", &tm);
+    field(ids.station);
+    field(ids.lane);
+    field(uid_of(e));
+    field(std::string(when));
+    field(std::to_string(e.id));
+    field(e.source);
+    field(e.vehicle_id);
+    field(e.bench);
+    field(e.end_reason);
+    field(e.flags);
+    field(std::to_string(e.points));
+    field(e.model_hash);
+    field(e.calibration_toml);
+    field(e.result_json);
+    field(number(f.wheel_load_n));
+    field(number(f.peak_friction));
+    field(number(f.slip_stiffness_n));
+    field(f.method.empty() ? std::nullopt : std::optional<std::string>(f.method));
+    if (blob.empty()) {
+      field(std::nullopt);
+      field(std::nullopt, true);
+    } else {
+      static constexpr char kHex[] = "0123456789abcdef";
+      std::string hex = "\\x";
+      hex.reserve(2 + 2 * blob.size());
+      for (unsigned char ch : blob) {
+        hex += kHex[ch >> 4];
+        hex += kHex[ch & 15];
+      }
+      field(hex);
+      field(std::to_string(count), true);
+    }
     out.last_row_id = e.id;
   }
-  sql += " ON CONFLICT (event_uid, created_at) DO NOTHING";
-  const PgResult r = pg.exec(sql, params);
+  pg.exec("BEGIN");
+  try {
+    pg.exec(
+        "CREATE TEMP TABLE IF NOT EXISTS incoming (LIKE brakefit.events INCLUDING DEFAULTS) ON "
+        "COMMIT DELETE ROWS");
+    pg.copy_in(fmt::format("COPY incoming ({}) FROM STDIN", kCols), rows);
+    const PgResult r =
+        pg.exec(fmt::format("INSERT INTO brakefit.events ({0}) SELECT {0} FROM "
+                            "incoming ON CONFLICT (event_uid, created_at) DO NOTHING",
+                            kCols));
+    pg.exec("COMMIT");
+    out.inserted = static_cast<std::size_t>(r.affected());
+  } catch (...) {
+    try {
+      pg.exec("ROLLBACK");
+    } catch (const PgError&) {
+      // The connection is gone: the server rolls the transaction back itself.
+    }
+    throw;
+  }
   out.sent = events.size();
-  out.inserted = static_cast<std::size_t>(r.affected());
   return out;
 }
 

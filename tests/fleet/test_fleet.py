@@ -225,6 +225,14 @@ class Shipping(unittest.TestCase):
         self.assertAlmostEqual(float(got[0]), hybrid["D"] / 3800, places=9)
         self.assertAlmostEqual(float(got[1]), hybrid["B"] * hybrid["C"] * hybrid["D"], places=3)
         self.assertEqual(got[2], "hybrid")
+        # The raw samples arrive byte for byte.
+        db = sqlite3.connect(self.north.store)
+        blob, count = db.execute("SELECT s.data, s.count FROM samples s JOIN events e ON "
+                                 "e.id = s.event_id WHERE e.uid = ?", (uid,)).fetchone()
+        db.close()
+        self.assertEqual(SERVER.psql(f"SELECT encode(samples, 'hex') || '|' || samples_count FROM "
+                                     f"brakefit.events WHERE event_uid = '{uid}'"),
+                         f"{blob.hex()}|{count}")
         r = self.north.once()
         self.assertEqual(r.returncode, 0, r.stderr)
         self.north.assert_exactly_once(self)
