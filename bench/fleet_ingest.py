@@ -137,7 +137,8 @@ def main():
                                 capture_output=True, text=True).stdout.strip()
         rate = total / wall
         print(f"<!-- written by `python3 bench/fleet_ingest.py --stations {a.stations} --events "
-              f"{a.events} --report-events {a.report_events}` at commit {commit} -->\n")
+              f"{a.events} --report-events {a.report_events} --parallel {a.parallel}` at commit "
+              f"{commit} -->\n")
         print("| figure | measured | target |\n|---|---|---|")
         print(f"| ingest, {a.stations} stations x {a.events} events, {a.parallel} syncs at a time | "
               f"{rate:.0f} events/s ({total} in {wall:.1f} s) | >= 5000 events/s |")
