@@ -65,7 +65,7 @@ void add_fleet_command(CLI::App& app) {
       ->required();
   add->callback([o] {
     auto pg = connect(o->url, o->password_file, "fleet-add-station");
-    const auto station_pw = fleet_settings("", o->station_password_file, "x").at("password");
+    const std::string station_pw = read_password_file(o->station_password_file);
     try {
       fleet::add_station(*pg, o->station, o->role, station_pw);
     } catch (const fleet::PgError& e) {

@@ -97,9 +97,7 @@ void print_table(const tyre::Mf61FitResult& fit) {
   fmt::print("MF 6.1 from {} curves ({} loads, {} pressures, {} speeds): RMS {:.2f} % of peak\n",
              fit.curves.size(), fit.loads, fit.pressures, fit.speeds, fit.rms_pct_peak);
   for (std::size_t i = 0; i < tyre::kCoefCount; ++i) {
-    std::string reason;
-    for (const auto& h : fit.held)
-      if (h.index == i) reason = h.reason;
+    const std::string reason = fit.held_reason(i);
     if (reason.empty())
       fmt::print("  {:<5} {:>12.6g}  +- {:.3g}\n", tyre::coef_name(i), fit.tyre.coef[i],
                  fit.stderr_[i]);

@@ -11,6 +11,16 @@
 
 namespace brakefit::cli {
 
+std::string read_password_file(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw ExitError(kExitNoInput, fmt::format("{}: cannot read the password file", path));
+  std::stringstream ss;
+  ss << f.rdbuf();
+  std::string pw = ss.str();
+  while (!pw.empty() && (pw.back() == '\n' || pw.back() == '\r')) pw.pop_back();
+  return pw;
+}
+
 std::map<std::string, std::string> fleet_settings(const std::string& url,
                                                   const std::string& password_file,
                                                   const std::string& application_name) {
@@ -23,15 +33,7 @@ std::map<std::string, std::string> fleet_settings(const std::string& url,
                                        {"connect_timeout", "10"},
                                        {"application_name", application_name}};
   if (!password_file.empty()) {
-    std::ifstream f(password_file);
-    if (!f)
-      throw ExitError(kExitNoInput,
-                      fmt::format("{}: cannot read the password file", password_file));
-    std::stringstream ss;
-    ss << f.rdbuf();
-    std::string pw = ss.str();
-    while (!pw.empty() && (pw.back() == '\n' || pw.back() == '\r')) pw.pop_back();
-    s["password"] = pw;
+    s["password"] = read_password_file(password_file);
   } else if (const char* env = std::getenv("BRAKEFIT_FLEET_PASSWORD")) {
     s["password"] = env;
   }

@@ -7,6 +7,9 @@
 
 namespace brakefit::cli {
 
+/// A password file's first line (trailing newline dropped); ExitError 66 when it cannot be read.
+std::string read_password_file(const std::string& path);
+
 /// libpq settings for the URL: sslmode=verify-full, connect_timeout, application_name, and the
 /// password from password_file (trailing newline dropped), else $BRAKEFIT_FLEET_PASSWORD (else
 /// libpq's own PGPASSWORD/PGPASSFILE). ExitError 64 when the URL carries a password, 66 when the

@@ -42,9 +42,7 @@ nlohmann::ordered_json fit_json(const tyre::Mf61FitResult& fit) {
   j["conditions"] = {{"loads", fit.loads}, {"pressures", fit.pressures}, {"speeds", fit.speeds}};
   auto coefs = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < tyre::kCoefCount; ++i) {
-    std::string reason;
-    for (const auto& h : fit.held)
-      if (h.index == i) reason = h.reason;
+    const std::string reason = fit.held_reason(i);
     coefs.push_back(
         {{"name", tyre::coef_name(i)},
          {"value", fit.tyre.coef[i]},

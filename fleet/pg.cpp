@@ -37,13 +37,16 @@ std::int64_t PgResult::affected() const {
 
 namespace {
 
-std::string conn_error(pg_conn* c) {
-  std::string m = PQerrorMessage(c);
+/// libpq's multi-line messages, on one log line.
+std::string one_line(std::string m) {
   while (!m.empty() && (m.back() == '\n' || m.back() == ' ')) m.pop_back();
-  // libpq's multi-line messages read better on one log line.
   for (auto& ch : m)
     if (ch == '\n') ch = ' ';
   return m;
+}
+
+std::string conn_error(pg_conn* c) {
+  return one_line(PQerrorMessage(c));
 }
 
 /// Throws PgError for a failed statement (with its SQLSTATE), else hands the result over.
@@ -56,11 +59,7 @@ PgResult checked(pg_conn* c, pg_result* r) {
     if (const char* s = PQresultErrorField(r, PG_DIAG_SQLSTATE)) state = s;
     PQclear(r);
   }
-  if (msg.empty()) msg = conn_error(c);
-  while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
-  for (auto& ch : msg)
-    if (ch == '\n') ch = ' ';
-  throw PgError(msg, state);
+  throw PgError(msg.empty() ? conn_error(c) : one_line(msg), state);
 }
 
 }  // namespace

@@ -9,18 +9,14 @@
 
 #include "brakefit/version.hpp"
 #include "core/plot/svg.hpp"
+#include "fleet/utc_text.hpp"
 
 namespace brakefit::fleet {
 
 namespace {
 
 std::string iso_date(std::int64_t t) {
-  const auto tt = static_cast<std::time_t>(t);
-  std::tm tm{};
-  gmtime_r(&tt, &tm);
-  char buf[16];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d", &tm);
-  return buf;
+  return utc_text(t, "%Y-%m-%d");
 }
 
 double num(const PgResult& r, int row, int col) {

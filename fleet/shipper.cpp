@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "core/pipeline/calibration.hpp"
+#include "fleet/utc_text.hpp"
 
 namespace brakefit::fleet {
 
@@ -111,12 +112,9 @@ BatchOutcome ship_batch(Pg& pg, const StationIds& ids,
   if (events.empty()) return out;
   // The months' partitions first, each in its own short statement: creating one locks the
   // parent table, which must not wait on this batch's insert.
-  std::set<std::pair<int, int>> months;
+  std::set<std::string> months;
   for (const auto& e : events) {
-    const auto t = static_cast<std::time_t>(e.created_unix_s);
-    std::tm tm{};
-    gmtime_r(&t, &tm);
-    if (months.insert({tm.tm_year, tm.tm_mon}).second)
+    if (months.insert(utc_text(e.created_unix_s, "%Y-%m")).second)
       pg.exec("SELECT brakefit.ensure_month(to_timestamp($1))",
               {PgParam::text(std::to_string(e.created_unix_s))});
   }
@@ -141,15 +139,10 @@ BatchOutcome ship_batch(Pg& pg, const StationIds& ids,
     std::int64_t count = 0;
     const std::string blob =
         with_samples && e.samples_stored ? store.samples_blob(e.id, &count) : std::string();
-    const auto t = static_cast<std::time_t>(e.created_unix_s);
-    std::tm tm{};
-    gmtime_r(&t, &tm);
-    char when[40];
-    std::strftime(when, sizeof when, "%Y-%m-%d %H:%M:%S+00", &tm);
     field(ids.station);
     field(ids.lane);
     field(uid_of(e));
-    field(std::string(when));
+    field(utc_text(e.created_unix_s, "%Y-%m-%d %H:%M:%S+00"));
     field(std::to_string(e.id));
     field(e.source);
     field(e.vehicle_id);

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "brakefit/version.hpp"
+#include "fleet/utc_text.hpp"
 
 namespace brakefit::fleet {
 
@@ -27,13 +28,7 @@ std::int64_t now_s() {
 }
 
 std::string iso(std::int64_t t) {
-  if (t <= 0) return "never";
-  const auto tt = static_cast<std::time_t>(t);
-  std::tm tm{};
-  gmtime_r(&tt, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
+  return t <= 0 ? std::string("never") : utc_text(t, "%Y-%m-%dT%H:%M:%SZ");
 }
 
 void write_atomically(const std::string& path, const std::string& text) {

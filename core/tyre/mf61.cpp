@@ -47,13 +47,4 @@ double braking_force_n(const Mf61Tyre& t, const OperatingPoint& op, double slip_
   return -mf61_fx<double>(t.coef.data(), t.ref, op, -slip_ratio);
 }
 
-double slip_stiffness_n(const Mf61Tyre& t, const OperatingPoint& op) {
-  // Central difference over +-1e-6 of slip: Kxk is the formula's slope at kappa = -SHx, and the
-  // shifts are tiny; the difference is what a user of the file sees.
-  const double h = 1e-6;
-  return (mf61_fx<double>(t.coef.data(), t.ref, op, h) -
-          mf61_fx<double>(t.coef.data(), t.ref, op, -h)) /
-         (2 * h);
-}
-
 }  // namespace brakefit::tyre

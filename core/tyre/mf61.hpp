@@ -57,8 +57,6 @@ struct Mf61Reference {
 struct Mf61Tyre {
   Mf61Reference ref;
   CoefVector coef{};
-  double operator[](Coef c) const { return coef[static_cast<std::size_t>(c)]; }
-  double& operator[](Coef c) { return coef[static_cast<std::size_t>(c)]; }
 };
 
 /// Where a curve was measured: wheel load, inflation pressure and the wheel centre's speed.
@@ -108,7 +106,5 @@ T mf61_fx(const T* c, const Mf61Reference& r, const OperatingPoint& op, double k
 
 /// Braking force (positive) at braking slip s (0..1).
 double braking_force_n(const Mf61Tyre& t, const OperatingPoint& op, double slip_ratio);
-/// The longitudinal slip stiffness dFx/dkappa at zero slip, N per unit slip (MF 6.1 Kxk).
-double slip_stiffness_n(const Mf61Tyre& t, const OperatingPoint& op);
 
 }  // namespace brakefit::tyre

@@ -265,6 +265,12 @@ double overall_rms_pct(const std::vector<CurveFit>& curves) {
   return curves.empty() ? 0.0 : std::sqrt(sum_sq / static_cast<double>(curves.size()));
 }
 
+std::string Mf61FitResult::held_reason(std::size_t i) const {
+  for (const auto& h : held)
+    if (h.index == i) return h.reason;
+  return {};
+}
+
 bool Mf61FitResult::held_at(std::size_t i) const {
   return std::any_of(held.begin(), held.end(), [i](const HeldCoef& h) { return h.index == i; });
 }

@@ -67,6 +67,8 @@ struct Mf61FitResult {
   int iterations = 0;
   bool converged = false;
   bool held_at(std::size_t i) const;
+  /// Why coefficient i is held (empty: it was fitted).
+  std::string held_reason(std::size_t i) const;
 };
 
 /// The fit works on at most this many points a curve: a 1 kHz event's thousands of points are

@@ -37,12 +37,6 @@ void text_key(std::string& out, const std::string& name, const std::string& valu
   out += fmt::format("{:<22}= {}\n", name, quoted(value));
 }
 
-std::string held_reason(const Mf61FitResult& fit, std::size_t i) {
-  for (const auto& h : fit.held)
-    if (h.index == i) return h.reason;
-  return {};
-}
-
 }  // namespace
 
 std::string format_tir(const Mf61FitResult& fit, const TirProvenance& prov,
@@ -142,7 +136,7 @@ std::string format_tir(const Mf61FitResult& fit, const TirProvenance& prov,
     key(out, n, v, note);
   }
   const std::size_t lmuv = static_cast<std::size_t>(Coef::LMUV);
-  const std::string lmuv_held = held_reason(fit, lmuv);
+  const std::string lmuv_held = fit.held_reason(lmuv);
   key(out, "LMUV", fit.tyre.coef[lmuv],
       lmuv_held.empty() ? fmt::format("fitted, standard error {:.3g}", fit.stderr_[lmuv])
                         : "held: " + lmuv_held);
@@ -150,7 +144,7 @@ std::string format_tir(const Mf61FitResult& fit, const TirProvenance& prov,
   out += "[LONGITUDINAL_COEFFICIENTS]\n";
   for (std::size_t i = 0; i < kCoefCount; ++i) {
     if (i == lmuv) continue;
-    const std::string why = held_reason(fit, i);
+    const std::string why = fit.held_reason(i);
     key(out, std::string(coef_name(i)), fit.tyre.coef[i],
         why.empty() ? fmt::format("fitted, standard error {:.3g}", fit.stderr_[i])
                     : "held: " + why);
