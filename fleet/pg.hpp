@@ -7,6 +7,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 struct pg_conn;
@@ -70,7 +71,7 @@ class Pg {
   PgResult exec(const std::string& sql, const std::vector<PgParam>& params = {});
   /// Several statements without parameters (migrations).
   void exec_script(const std::string& sql);
-  /// COPY ... FROM STDIN with these rows in COPY's text format (copy_text() escapes a field).
+  /// COPY ... FROM STDIN with these rows in COPY's text format (append_copy_text() writes a field).
   void copy_in(const std::string& copy_sql, const std::string& rows);
   /// The server as "user@host:port/db" (for logs).
   std::string describe() const;
@@ -80,9 +81,9 @@ class Pg {
   pg_conn* c_ = nullptr;
 };
 
-/// A field for COPY's text format: backslash, tab, newline and carriage return escaped; nullopt
-/// is \N.
-std::string copy_text(const std::optional<std::string>& v);
+/// Appends a field in COPY's text format: backslash, tab, newline and carriage return escaped;
+/// nullopt is \N.
+void append_copy_text(std::string& out, std::optional<std::string_view> v);
 
 /// True when the URL or key=value string carries a password (refused on a command line).
 bool carries_password(const std::string& url);

@@ -126,8 +126,12 @@ BatchOutcome ship_batch(Pg& pg, const StationIds& ids,
       "end_reason, flags, points, model_hash, calibration_toml, result, wheel_load_n, "
       "peak_friction, slip_stiffness_n, fit_method, samples, samples_count";
   std::string rows;
-  auto field = [&rows](const std::optional<std::string>& v, bool last = false) {
-    rows += copy_text(v);
+  std::size_t text_bytes = 0;
+  for (const auto& e : events)
+    text_bytes += e.result_json.size() + e.calibration_toml.size() + e.flags.size() + 256;
+  rows.reserve(text_bytes + text_bytes / 16);
+  auto field = [&rows](std::optional<std::string_view> v, bool last = false) {
+    append_copy_text(rows, v);
     rows += last ? '\n' : '\t';
   };
   auto number = [](double v) -> std::optional<std::string> {
@@ -156,19 +160,19 @@ BatchOutcome ship_batch(Pg& pg, const StationIds& ids,
     field(number(f.wheel_load_n));
     field(number(f.peak_friction));
     field(number(f.slip_stiffness_n));
-    field(f.method.empty() ? std::nullopt : std::optional<std::string>(f.method));
+    field(f.method.empty() ? std::nullopt : std::optional<std::string_view>(f.method));
     if (blob.empty()) {
       field(std::nullopt);
       field(std::nullopt, true);
     } else {
+      // bytea's hex input, its backslash escaped for COPY, written in place: a blob is large.
       static constexpr char kHex[] = "0123456789abcdef";
-      std::string hex = "\\x";
-      hex.reserve(2 + 2 * blob.size());
+      rows += "\\\\x";
       for (unsigned char ch : blob) {
-        hex += kHex[ch >> 4];
-        hex += kHex[ch & 15];
+        rows += kHex[ch >> 4];
+        rows += kHex[ch & 15];
       }
-      field(hex);
+      rows += '\t';
       field(std::to_string(count), true);
     }
     out.last_row_id = e.id;
@@ -176,8 +180,8 @@ BatchOutcome ship_batch(Pg& pg, const StationIds& ids,
   pg.exec("BEGIN");
   try {
     pg.exec(
-        "CREATE TEMP TABLE IF NOT EXISTS incoming (LIKE brakefit.events INCLUDING DEFAULTS) ON "
-        "COMMIT DELETE ROWS");
+        "CREATE TEMP TABLE IF NOT EXISTS incoming (LIKE brakefit.events INCLUDING DEFAULTS "
+        "INCLUDING COMPRESSION) ON COMMIT DELETE ROWS");
     pg.copy_in(fmt::format("COPY incoming ({}) FROM STDIN", kCols), rows);
     const PgResult r =
         pg.exec(fmt::format("INSERT INTO brakefit.events ({0}) SELECT {0} FROM "
