@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <future>
 
@@ -25,6 +26,11 @@ std::vector<std::string> implausible_curve(const MfParams& p, double wheel_load_
                       mu, wheel_load_n, l.min_peak_friction, l.max_peak_friction));
   }
   return why;
+}
+
+void flag_implausible(MethodResult& r, double wheel_load_n) {
+  const auto why = implausible_curve(r.params, wheel_load_n);
+  r.implausible.insert(r.implausible.end(), why.begin(), why.end());
 }
 
 const char* to_string(Method m) {
@@ -94,6 +100,21 @@ SomEstimate identify_som(const Model& m, const Curve& c) {
   return est;
 }
 
+std::vector<std::string> mlp_outside_training(const Model& m, const Curve& c) {
+  const double shortest =
+      m.config.mlp_truncate_fraction > 0 ? m.config.mlp_truncate_min_ratio : m.grid.back();
+  // Training masks the grid past its cut, so the shortest curve it saw ends on the last grid
+  // point at or below the shortest cut.
+  const auto past = std::upper_bound(m.grid.begin(), m.grid.end(), shortest + 1e-12);
+  const double seen = past == m.grid.begin() ? shortest : *std::prev(past);
+  const double ends = resample_to_grid(c, m.grid).last_valid_slip(m.grid);
+  if (ends >= seen - 1e-12) return {};
+  return {
+      fmt::format("MLP extrapolating: the curve ends at {:.1f} % slip, the network was trained "
+                  "on curves reaching at least {:.1f} %",
+                  100.0 * ends, 100.0 * shortest)};
+}
+
 MfParams identify_mlp(const Model& m, const Curve& c) {
   const GridCurve g = resample_to_grid(c, m.grid);
   const Eigen::MatrixXd x = m.mlp_in.apply(mlp_features(g, m.grid));
@@ -132,6 +153,7 @@ MethodResult run_method(Method method, const Model* model, const Curve& c,
     }
     case Method::Mlp:
       r.params = identify_mlp(*model, c);
+      r.implausible = mlp_outside_training(*model, c);
       break;
     case Method::Lm: {
       const fit::MfFitResult f = fit::fit_mf(c, fit::classic_start(c), options);

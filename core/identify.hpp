@@ -68,6 +68,14 @@ struct TyreLimits {
 std::vector<std::string> implausible_curve(const MfParams& p, double wheel_load_n,
                                            const TyreLimits& l = {});
 
+/// Adds implausible_curve's reasons to those the method itself gave (an MLP extrapolating).
+void flag_implausible(MethodResult& r, double wheel_load_n);
+
+/// Why the MLP's estimate for this curve is an extrapolation (empty when it is not): the curve
+/// ends at a slip short of any the network was trained on (training cuts curves no shorter than
+/// the model's truncate range allows). Such an estimate is flagged with the implausible ones.
+std::vector<std::string> mlp_outside_training(const Model& m, const Curve& c);
+
 /// Peak-normalised shape on the grid (divided by max |value| over the valid points).
 std::vector<double> normalise_shape(const GridCurve& g);
 /// MLP input features: the normalised shape (0 where masked) and the last valid slip.

@@ -60,7 +60,7 @@ EventResult Pipeline::fit(Event e, const Calibration& c) const {
     }
   }
   // A result no tyre could give is said with every output of it, never shown as a plain result.
-  for (auto& m : r.results) m.implausible = implausible_curve(m.params, c.wheel_load_n);
+  for (auto& m : r.results) flag_implausible(m, c.wheel_load_n);
   r.event = std::move(e);
   if (opt_.fit && opt_.bench_model) add_tyre_results(r, c, *opt_.bench_model, model_, opt_.force);
   return r;

@@ -42,7 +42,7 @@ void add_tyre_results(EventResult& e, const Calibration& c, const gap::BenchMode
   for (const auto& raw : e.results) {
     MethodResult t = run_method(raw.method, model, pts.curve, fo);
     t.basis = Basis::Tyre;
-    t.implausible = implausible_curve(t.params, c.wheel_load_n);
+    flag_implausible(t, c.wheel_load_n);
     e.tyre_results.push_back(std::move(t));
   }
   e.tyre_curve = std::move(pts.curve);

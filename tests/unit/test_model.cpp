@@ -1,3 +1,4 @@
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "tests/unit/test_util.hpp"
@@ -164,6 +165,33 @@ TEST(Identify, LeastSquaresBoundsCoverTheModelsDatabaseRanges) {
   m.config.database = database_preset("paper");
   EXPECT_DOUBLE_EQ(fit_options_for(&m).bounds.E_hi, 50.0);
   EXPECT_DOUBLE_EQ(fit_options_for(&m).bounds.B_hi, 200.0);
+}
+
+TEST(Identify, TheMlpFlagsACurveShorterThanAnyItWasTrainedOn) {
+  Model m = tiny_model();
+  const MfParams p{16, 1.6, 5000, 0.25, 0, 0};
+  ASSERT_GT(m.config.mlp_truncate_fraction, 0.0);
+  const double shortest = m.config.mlp_truncate_min_ratio;
+  // A roller test to its 27 % switch-off is inside what it saw; the tyre's 11 % is not.
+  const MethodResult full = run_method(Method::Mlp, &m, sample_curve(p, even_slips(100, 0.27)));
+  EXPECT_TRUE(full.implausible.empty());
+  const MethodResult short_ = run_method(Method::Mlp, &m, sample_curve(p, even_slips(100, 0.11)));
+  ASSERT_EQ(short_.implausible.size(), 1u);
+  EXPECT_NE(short_.implausible[0].find("MLP extrapolating: the curve ends at"), std::string::npos);
+  EXPECT_NE(short_.implausible[0].find(fmt::format("{:.1f} %", 100 * shortest)), std::string::npos);
+  // A curve cut exactly at the shortest cut is one the training made.
+  EXPECT_TRUE(mlp_outside_training(m, sample_curve(p, even_slips(100, shortest))).empty());
+  // The other methods are not judged by the MLP's training; plausibility reasons are added to it.
+  EXPECT_TRUE(
+      run_method(Method::Lm, &m, sample_curve(p, even_slips(100, 0.11))).implausible.empty());
+  MethodResult flagged = short_;
+  flagged.params.C = 0.3;
+  flag_implausible(flagged, 3800.0);
+  EXPECT_GE(flagged.implausible.size(), 2u);
+  // A model trained on whole curves only: anything short of the grid's end is an extrapolation.
+  m.config.mlp_truncate_fraction = 0.0;
+  EXPECT_FALSE(mlp_outside_training(m, sample_curve(p, even_slips(100, 0.27))).empty());
+  EXPECT_TRUE(mlp_outside_training(m, sample_curve(p, even_slips(100, m.grid.back()))).empty());
 }
 
 TEST(Identify, ShapeScaleIsTheLinearLeastSquaresD) {
