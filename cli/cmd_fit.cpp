@@ -1,4 +1,5 @@
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include <cmath>
@@ -9,8 +10,10 @@
 #include "brakefit/version.hpp"
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
+#include "cli/recording.hpp"
 #include "core/curve_csv.hpp"
 #include "core/event_json.hpp"
+#include "core/pipeline/event_csv.hpp"
 #include "core/plot/charts.hpp"
 
 namespace brakefit::cli {
@@ -29,13 +32,15 @@ std::string plot_path_for(const std::string& plot, const std::string& file, std:
 
 void add_fit_command(CLI::App& app) {
   struct Opts {
-    std::string method = "all", model, plot, slip_unit = "ratio";
+    std::string method = "all", model, plot, slip_unit = "ratio", bench_model;
     bool json = false, shifts = false;
     std::vector<std::string> files;
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand(
-      "fit", "Identify B, C, D, E of brake-slip curves (CSV: slip,force_n or slip_pct,force_n)");
+      "fit",
+      "Identify B, C, D, E of brake-slip curves (CSV: slip,force_n or slip_pct,force_n) or of "
+      "exported events");
   cmd->add_option("--method", o->method, "som|mlp|lm|hybrid|all")
       ->check(CLI::IsMember({"som", "mlp", "lm", "hybrid", "all"}))
       ->capture_default_str();
@@ -50,7 +55,13 @@ void add_fit_command(CLI::App& app) {
       ->check(CLI::IsMember({"ratio", "percent"}))
       ->capture_default_str();
   cmd->add_flag("--shifts", o->shifts, "least-squares methods also fit SHx and SVx");
-  cmd->add_option("curves", o->files, "curve CSV files")->required();
+  cmd->add_option("--bench-model", o->bench_model,
+                  "the bench's measurement model (brakefit gap --bench-model): each event CSV is "
+                  "also fitted with its effects undone, on the tyre's basis");
+  cmd->add_option("files", o->files,
+                  "curve CSV files, or event CSVs (brakefit export: fitted as replay fits them, "
+                  "brakefit.event/1 with --json)")
+      ->required();
   cmd->callback([o] {
     std::vector<Method> methods;
     if (o->method == "all") {
@@ -60,13 +71,49 @@ void add_fit_command(CLI::App& app) {
       parse(o->method, m);
       methods = {m};
     }
-    const bool needs_model = o->method != "lm" || !o->model.empty();
+    // Event CSVs are fitted as replay fits them (and need the model for their calibration's
+    // conditioning); the rest are curves.
+    std::vector<std::string> event_files, curve_files;
+    for (const auto& f : o->files)
+      (pipeline::looks_like_event_csv(read_file(f)) ? event_files : curve_files).push_back(f);
+    std::shared_ptr<const gap::BenchModel> bench_model;
+    if (!o->bench_model.empty()) {
+      if (event_files.empty())
+        throw ExitError(
+            kExitUsage,
+            "--bench-model undoes a bench's effects on an event's samples: give event CSVs "
+            "(brakefit export), not curve CSVs");
+      bench_model = load_bench_model(o->bench_model);
+    }
+    const bool needs_model = o->method != "lm" || !o->model.empty() || !event_files.empty();
     std::optional<Model> model;
     if (needs_model) model = load_model(resolve_model_path(o->model));
     // Parse every file before printing anything: a bad file means no partial output.
+    std::vector<Run> runs;
+    if (!event_files.empty()) {
+      RunOptions ro;
+      ro.pipeline.methods = methods;
+      ro.pipeline.bench_model = bench_model;
+      for (const auto& f : event_files) runs.push_back(process_run(f, ro, &*model));
+    }
+    if (!o->plot.empty() && !event_files.empty())
+      spdlog::warn("--plot draws curve CSVs; `brakefit replay --report DIR` draws events");
+    if (bench_model && !curve_files.empty())
+      spdlog::warn(
+          "--bench-model is not applied to curve CSVs ({}): a curve has no samples in "
+          "time to undo a bench's effects on",
+          fmt::join(curve_files, ", "));
     std::vector<ParsedCurve> curves;
-    curves.reserve(o->files.size());
-    for (const auto& f : o->files) curves.push_back(parse_curve_csv(read_file(f), f));
+    curves.reserve(curve_files.size());
+    for (const auto& f : curve_files) curves.push_back(parse_curve_csv(read_file(f), f));
+    o->files = curve_files;
+    for (const Run& run : runs)
+      for (const auto& e : run.events) {
+        if (o->json)
+          std::cout << event_json(e, run.path, &*model).dump() << "\n";
+        else
+          print_event(run, e, bench_model.get());
+      }
     fit::MfFitOptions fit_opts = fit_options_for(model ? &*model : nullptr);
     fit_opts.fit_shifts = o->shifts;
     const SlipUnit unit = o->slip_unit == "percent" ? SlipUnit::Percent : SlipUnit::Ratio;
@@ -79,7 +126,7 @@ void add_fit_command(CLI::App& app) {
       for (Method m : methods) {
         rs.push_back(run_method(m, model ? &*model : nullptr, curves[i].curve, fit_opts));
         // A curve file carries no wheel load: its shape alone is judged.
-        rs.back().implausible = implausible_curve(rs.back().params, std::nan(""));
+        flag_implausible(rs.back(), std::nan(""));
       }
       all.push_back(std::move(rs));
     }

@@ -26,18 +26,6 @@ void add_run_options(CLI::App* cmd, RunOptions& ro, std::string& force) {
       ->capture_default_str();
 }
 
-/// One line per method: B, C, D, E, MAPE, RMSE and what must be said beside them.
-void print_results(const std::vector<MethodResult>& results) {
-  for (std::size_t m = 0; m < results.size(); ++m) {
-    const auto& r = results[m];
-    const std::string notes = result_notes(results, m);
-    std::cout << fmt::format(
-        "  {:<7} B {:>8.3f} C {:>6.4f} D {:>8.1f} E {:>8.4f}  MAPE {:>6.2f} %  RMSE {:>7.1f} N{}\n",
-        to_string(r.method), r.params.B, r.params.C, r.params.D, r.params.E, r.metrics.mape_pct,
-        r.metrics.rmse_n, notes.empty() ? "" : "  (" + notes + ")");
-  }
-}
-
 }  // namespace
 
 void add_replay_command(CLI::App& app) {
@@ -101,21 +89,7 @@ void add_replay_command(CLI::App& app) {
                                           can::to_string(e.event.bench), e.event.end_reason),
                               e.curve, e.results, SlipUnit::Percent));
         }
-        if (o->json) continue;
-        std::cout << fmt::format(
-            "{} event {}: {} bench, {:.2f} s, {} points to {:.1f} % slip, ended by {}{}\n",
-            run.path, e.event.event_id, can::to_string(e.event.bench),
-            static_cast<double>(e.event.t_end_ns - e.event.t_start_ns) * 1e-9, e.curve.size(),
-            100 * e.curve.max_slip_ratio(), e.event.end_reason,
-            e.event.flags.empty() ? ""
-                                  : fmt::format(" [flags: {}]", fmt::join(e.event.flags, ", ")));
-        print_results(e.results);
-        if (bench_model && (!e.tyre_results.empty() || !e.tyre_notes.empty()))
-          std::cout << fmt::format(
-              "  the tyre's curve (the bench model's {} undone){}\n", held_effects(*bench_model),
-              e.tyre_notes.empty() ? std::string()
-                                   : fmt::format(": {}", fmt::join(e.tyre_notes, "; ")));
-        print_results(e.tyre_results);
+        if (!o->json) print_event(run, e, bench_model);
       }
       if (!o->json && run.events.empty()) std::cout << run.path << ": no brake event found\n";
     }

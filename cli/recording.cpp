@@ -5,10 +5,12 @@
 #include <fmt/ranges.h>
 
 #include <filesystem>
+#include <iostream>
 
 #include "cli/commands.hpp"
 #include "cli/io.hpp"
 #include "core/can/candump.hpp"
+#include "core/event_json.hpp"
 #include "core/pipeline/event_csv.hpp"
 
 namespace brakefit::cli {
@@ -138,6 +140,38 @@ std::string held_effects(const gap::BenchModel& bm) {
                                gap::effect_param(e.effect).name, e.value));
   return held.empty() ? std::string("no instrument effect")
                       : fmt::format("{}", fmt::join(held, ", "));
+}
+
+namespace {
+
+/// One line per method: B, C, D, E, MAPE, RMSE and what must be said beside them.
+void print_results(const std::vector<MethodResult>& results) {
+  for (std::size_t m = 0; m < results.size(); ++m) {
+    const auto& r = results[m];
+    const std::string notes = result_notes(results, m);
+    std::cout << fmt::format(
+        "  {:<7} B {:>8.3f} C {:>6.4f} D {:>8.1f} E {:>8.4f}  MAPE {:>6.2f} %  RMSE {:>7.1f} N{}\n",
+        to_string(r.method), r.params.B, r.params.C, r.params.D, r.params.E, r.metrics.mape_pct,
+        r.metrics.rmse_n, notes.empty() ? "" : "  (" + notes + ")");
+  }
+}
+
+}  // namespace
+
+void print_event(const Run& run, const pipeline::EventResult& e,
+                 const gap::BenchModel* bench_model) {
+  std::cout << fmt::format(
+      "{} event {}: {} bench, {:.2f} s, {} points to {:.1f} % slip, ended by {}{}\n", run.path,
+      e.event.event_id, can::to_string(e.event.bench),
+      static_cast<double>(e.event.t_end_ns - e.event.t_start_ns) * 1e-9, e.curve.size(),
+      100 * e.curve.max_slip_ratio(), e.event.end_reason,
+      e.event.flags.empty() ? "" : fmt::format(" [flags: {}]", fmt::join(e.event.flags, ", ")));
+  print_results(e.results);
+  if (bench_model && (!e.tyre_results.empty() || !e.tyre_notes.empty()))
+    std::cout << fmt::format(
+        "  the tyre's curve (the bench model's {} undone){}\n", held_effects(*bench_model),
+        e.tyre_notes.empty() ? std::string() : fmt::format(": {}", fmt::join(e.tyre_notes, "; ")));
+  print_results(e.tyre_results);
 }
 
 }  // namespace brakefit::cli

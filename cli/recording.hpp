@@ -38,6 +38,11 @@ std::shared_ptr<const gap::BenchModel> load_bench_model(const std::string& path)
 /// The effects a bench model holds, e.g. "relaxation_length sigma_m 0.209, wheel_inertia ...".
 std::string held_effects(const gap::BenchModel& bm);
 
+/// The text report of one event: what it was, then one line per method (B, C, D, E, MAPE, RMSE
+/// and its notes), then the same on the tyre's basis when a bench model was applied.
+void print_event(const Run& run, const pipeline::EventResult& e,
+                 const gap::BenchModel* bench_model);
+
 /// An event a command did not use, and why: every command names them on stderr and in its JSON
 /// ("left_out"), so nothing is dropped silently.
 struct LeftOut {

@@ -5,6 +5,7 @@ curve comes within 2 % of the truth's peak where the instrument's does not."""
 import json
 import math
 import os
+import re
 import subprocess
 import tempfile
 import unittest
@@ -131,6 +132,56 @@ class TyreBasis(unittest.TestCase):
                            timeout=60)
         self.assertEqual(p.returncode, 78, p.stderr)
         self.assertIn("key 'bench.measurement_model'", p.stderr)
+
+
+    def test_the_shipped_model_is_what_gap_writes_today(self):
+        # data/bench_models/make.sh writes it from the same three runs as setUpClass.
+        def values(path):
+            with open(path) as f:
+                return {ln.split(" = ")[0]: float(ln.split(" = ")[1]) for ln in f
+                        if re.match(r"^[a-z0-9_]+ = [-0-9.e]+$", ln.strip())
+                        and not ln.startswith("version")}
+        shipped = values(os.path.join(ROOT, "data", "bench_models", "roller.bench.toml"))
+        fresh = values(self.model)
+        self.assertEqual(sorted(shipped), sorted(fresh))
+        self.assertGreaterEqual(len(fresh), 6, fresh)
+        for key, v in fresh.items():
+            self.assertAlmostEqual(shipped[key], v, delta=1e-6 * max(1.0, abs(v)), msg=key)
+
+    def test_fit_undoes_the_model_on_an_exported_event(self):
+        events = os.path.join(self.tmp.name, "events")
+        log = os.path.join(REC, "roller_1p0bar_fast.log")
+        r = run("export", log, "--events", events)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        csv = os.path.join(events, "roller_1p0bar_fast-event-1.csv")
+        r = run("fit", "--json", "--bench-model", self.model, csv)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        doc = json.loads(r.stdout.splitlines()[0])
+        self.assertEqual(doc["schema"], "brakefit.event/1")
+        with open(log[:-4] + ".truth.json") as f:
+            truth = json.load(f)["pac96_equivalent"]
+        slip = doc["tyre_max_slip_ratio"]
+        for method in ("lm", "hybrid"):
+            raw = next(x for x in doc["results"] if x["method"] == method)
+            tyre = next(x for x in doc["tyre_results"] if x["method"] == method)
+            self.assertEqual((raw["basis"], tyre["basis"]), ("instrument", "tyre"))
+            self.assertLess(rms_pct_peak(tyre, truth, slip), 2.0, (method, tyre))
+            self.assertGreater(rms_pct_peak(raw, truth, slip), 5.0, (method, raw))
+        # The tyre's curve ends short of the switch-off, short of any curve the MLP was trained
+        # on: its estimate is flagged as an extrapolation, not published as a plain result.
+        mlp = next(x for x in doc["tyre_results"] if x["method"] == "mlp")
+        self.assertTrue(any("MLP extrapolating" in w for w in mlp["implausible"]), mlp)
+        raw_mlp = next(x for x in doc["results"] if x["method"] == "mlp")
+        self.assertFalse(any("MLP extrapolating" in w for w in raw_mlp["implausible"]), raw_mlp)
+        r = run("fit", "--bench-model", self.model, csv)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("the tyre's curve (the bench model's ", r.stdout)
+        self.assertIn("NOT A TYRE'S CURVE: MLP extrapolating", r.stdout)
+        # A model is for events: with curve CSVs alone it is a usage error that says why.
+        curve = os.path.join(ROOT, "data", "curves", "roller_car_1bar.csv")
+        r = run("fit", "--bench-model", self.model, curve)
+        self.assertEqual(r.returncode, 64, r.stderr)
+        self.assertIn("give event CSVs", r.stderr)
 
 
 if __name__ == "__main__":
