@@ -137,6 +137,8 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
   std::size_t past_end = 0;
   const double threshold_n = r.brake_gain_n_per_bar * p0_bar;
   const double r2 = r.wheel_radius_m * r.wheel_radius_m;
+  const double filter_gain_n_s =
+      r.pressure_rate_bar_per_s.size() == n ? r.pressure_filter_s * r.brake_gain_n_per_bar : 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     const double at = r.t_s[i] - dt_s;
     if (at > r.t_s.back()) {
@@ -148,11 +150,14 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
                          : std::max(slip.front() + r.initial_slip_rate_per_s * (at - r.t_s.front()),
                                     std::min(slip.front(), 0.0));
     const double accel = r.wheel_accel_mps2.empty() ? 0.0 : r.wheel_accel_mps2[i];
+    // A declared pressure filter (the exporting software's first order) undone: the line's
+    // pressure leads the channel by tau times its rate, and a fast ground ramp is tens of bar/s
+    // per 10 ms.
+    const double line_n = r.force_n[i] + filter_gain_n_s * r.pressure_rate_bar_per_s[i];
     out.curve.slip_ratio.push_back(s);
     // Below the threshold the pads give no torque: the channel reads up to p0 while the tyre
     // carries only the wheel's inertial force (predict's min(threshold, force), undone).
-    out.curve.force_n.push_back(r.force_n[i] + inertia * accel / r2 -
-                                std::min(threshold_n, r.force_n[i]));
+    out.curve.force_n.push_back(line_n + inertia * accel / r2 - std::min(threshold_n, line_n));
   }
   if (r.runaway)
     out.left_out.emplace_back(

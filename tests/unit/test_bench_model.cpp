@@ -153,3 +153,28 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   EXPECT_DOUBLE_EQ(m.effects[1].value, 0.9);
   EXPECT_EQ(m.not_held, std::vector<std::string>{"load_transfer"});
 }
+
+TEST(BenchModel, ADeclaredPressureFilterIsUndone) {
+  // The exporting software's first-order filter on the pressure channel (pressure_filter_s in
+  // the event CSV): the channel lags the line by tau, tens of newtons on a fast ramp.
+  const MfParams tyre{15.0, 1.58, 3400.0, 0.1, 0, 0};
+  gap::Run r = synthetic_run();
+  r.pressure_filter_s = 0.015;
+  r.initial_force_n = 0.0;
+  r.force_n = gap::predict(r, {tyre.B, tyre.C, tyre.D, tyre.E}, {});
+  const std::size_t n = r.t_s.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t a = i == 0 ? 0 : i - 1, b = i + 1 == n ? i : i + 1;
+    r.pressure_rate_bar_per_s[i] =
+        (r.force_n[b] - r.force_n[a]) / (r.t_s[b] - r.t_s[a]) / r.brake_gain_n_per_bar;
+  }
+  const gap::TyrePoints pts = gap::tyre_points(r, model_of({}, {}));
+  double worst = 0, raw_worst = 0;
+  for (std::size_t i = 10; i < n; ++i) {  // past the filter's start from rest
+    worst =
+        std::max(worst, std::abs(pts.curve.force_n[i] - mf_force_n(tyre, pts.curve.slip_ratio[i])));
+    raw_worst = std::max(raw_worst, std::abs(r.force_n[i] - mf_force_n(tyre, r.slip[i])));
+  }
+  EXPECT_LT(worst, 0.005 * tyre.D) << "raw points were " << raw_worst << " N off";
+  EXPECT_GT(raw_worst, 0.01 * tyre.D);
+}
