@@ -3,9 +3,11 @@
 //   second_sim --bench roller|ground --effect none|relaxation_length|... [--magnitude X]
 //              [--seed N] [--ripple R] [--speed-step MPS] [--pressure-filter S]
 //              [--pressure-step BAR] [--pressure-noise BAR] [--jitter RATIO] [--ripple-ref R]
-//              --out DIR
+//              [--truth-curve FILE] --out DIR
 // The optional overrides replace the drawn tester export (R: both encoders' relative ripple).
-// Prints the drawn tyre, the truth magnitude and the files written.
+// Prints the drawn tyre, the truth magnitude and the files written. --truth-curve writes the
+// tyre's steady-state curve at the set's load and pressure (slip,force_n, slip 0 to 1): what a
+// fit on the tyre's basis should find, with the instrument's effects undone.
 #include <fmt/format.h>
 
 #include <cstdlib>
@@ -19,7 +21,7 @@
 using namespace brakefit;
 
 int main(int argc, char** argv) {
-  std::string bench = "roller", effect = "none", out;
+  std::string bench = "roller", effect = "none", out, truth_curve;
   double magnitude = 0;
   std::uint64_t seed = 1;
   double ripple = -1, speed_step = -1, pressure_filter = -1, pressure_step = -1, jitter = -1,
@@ -50,6 +52,8 @@ int main(int argc, char** argv) {
       jitter = std::atof(v.c_str());
     else if (k == "--out")
       out = v;
+    else if (k == "--truth-curve")
+      truth_curve = v;
     else {
       std::cerr << "second_sim: unknown option " << k << "\n";
       return 64;
@@ -81,6 +85,17 @@ int main(int argc, char** argv) {
         "{:.3g} s, {} Hz\n",
         tx.speed_step_mps, tx.eccentricity_wheel, tx.eccentricity_ref, tx.pressure_filter_s,
         tx.sample_hz);
+    if (!truth_curve.empty()) {
+      const auto& r = set.runs.front();
+      sim2::Contact contact;
+      contact.fz_n = r.fz_n;
+      contact.pressure_pa = r.pressure_pa;
+      std::ofstream f(truth_curve);
+      f << "slip,force_n\n";
+      for (int i = 0; i <= 1000; ++i)
+        f << fmt::format("{:.3f},{:.6g}\n", i / 1000.0,
+                         sim2::mf61_braking_force_n(r.tyre, i / 1000.0, contact));
+    }
     for (std::size_t k = 0; k < set.runs.size(); ++k) {
       const std::string path = fmt::format("{}/{}-{}-{}.csv", out, bench, effect, k);
       std::ofstream(path) << sim2::simulate_event_csv(set.runs[k]);

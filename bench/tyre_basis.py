@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Per-event fits on the instrument's and on the tyre's basis, against the truth.
 
-    bench/tyre_basis.py [--build build/release]
+    bench/tyre_basis.py [--build build/release] [--b-sets 50]
     /usr/bin/python3 bench/tyre_basis.py --gen-c ../shared/gapgen/gen_c.py --c-sets 12
       (generator C imports numpy: Debian's python3-numpy, under /usr/bin/python3)
 
@@ -10,7 +10,12 @@
    `brakefit replay --bench-model` then fits every run with it. The model comes from the same
    runs ("same") and from the bench's runs at the other tyre pressure ("other": the bench's
    effects measured on runs the event was not among).
-2. Generator C (outside the project, when --gen-c is given): sets of three runs with one
+2. Generator B (sim/second, through build/release/bench/second_sim, when --b-sets is given):
+   sets of three runs with one instrument effect each at the referee's magnitudes (roller:
+   relaxation, time offset, brake threshold, slip offset, wheel inertia; ground: wheel inertia,
+   brake threshold, relaxation), the model from a second set (another tyre, load and export) of
+   the same bench, effect and magnitude; the truth is the set's tyre at its load and pressure.
+3. Generator C (outside the project, when --gen-c is given): sets of three runs with one
    instrument effect each (relaxation, time offset, brake threshold, slip offset, wheel inertia),
    the model from a second set of the same bench and effect, applied to the first.
 For each event and method: the fitted curve's RMS distance from the true curve over the event's
@@ -106,6 +111,52 @@ def recordings(brakefit, tmp):
     return rows
 
 
+# The referee's ranges (sim/referee.cpp) for the instrument effects a bench model holds.
+B_EFFECTS = [("roller", "relaxation_length", 0.05, 0.4), ("roller", "time_offset", 0.01, 0.05),
+             ("roller", "brake_threshold", 1.0, 5.0), ("roller", "slip_offset", 0.002, 0.01),
+             ("roller", "wheel_inertia", 0.5, 3.0), ("ground", "wheel_inertia", 0.5, 3.0),
+             ("ground", "brake_threshold", 1.0, 5.0), ("ground", "relaxation_length", 0.1, 0.5)]
+
+
+def truth_curve(path):
+    """The tyre's curve from second_sim --truth-curve (slip 0 to 1 in steps of 0.001)."""
+    with open(path) as f:
+        force = [float(ln.split(",")[1]) for ln in f.read().splitlines()[1:]]
+    def at(s):
+        x = min(max(s, 0.0), 1.0) * 1000
+        i = min(int(x), 999)
+        return force[i] + (x - i) * (force[i + 1] - force[i])
+    return at
+
+
+def generator_b(brakefit, second_sim, n_sets, tmp):
+    import random
+    rng = random.Random(36)
+    rows = []
+    for k in range(n_sets):
+        bench, effect, lo, hi = B_EFFECTS[k % len(B_EFFECTS)]
+        mag = rng.uniform(lo, hi)
+        seed = 7000 + k
+        dirs = []
+        for j, s in enumerate((seed, seed + 50000)):
+            d = os.path.join(tmp, f"b{k}_{j}")
+            run([second_sim, "--bench", bench, "--effect", effect, "--magnitude", repr(mag),
+                 "--seed", str(s), "--truth-curve", os.path.join(tmp, f"b{k}_{j}.truth.csv"),
+                 "--out", d])
+            dirs.append(d)
+        files = [os.path.join(dirs[0], f"{bench}-{effect}-{i}.csv") for i in range(3)]
+        model = bench_model(brakefit,
+                            [os.path.join(dirs[1], f"{bench}-{effect}-{i}.csv") for i in range(3)],
+                            os.path.join(tmp, f"b{k}.toml"))
+        truth = truth_curve(os.path.join(tmp, f"b{k}_0.truth.csv"))
+        for i, doc in enumerate(replay(brakefit, files, model)):
+            rows.append({"set": f"B {bench} {effect} {mag:.3g} seed {seed} run {i}",
+                         "model": "other set", "bench": bench,
+                         "notes": doc.get("tyre_notes", []), **score(doc, truth)})
+        log(f"generator B set {k + 1}/{n_sets}")
+    return rows
+
+
 def generator_c(brakefit, script, n_sets, tmp):
     spec = importlib.util.spec_from_file_location("gen_c", script)
     gen = importlib.util.module_from_spec(spec)
@@ -179,12 +230,14 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build", "release"))
     ap.add_argument("--gen-c", default=None, help="generator C's script (outside the project)")
     ap.add_argument("--c-sets", type=int, default=12)
+    ap.add_argument("--b-sets", type=int, default=0, help="generator B sets (0: none)")
     a = ap.parse_args()
     brakefit = os.path.join(a.build, "cli", "brakefit")
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
-    print(f"# bench/tyre_basis.py{' --gen-c ' + a.gen_c + f' --c-sets {a.c_sets}' if a.gen_c else ''}"
-          f"   (commit {commit})")
+    args = (f" --b-sets {a.b_sets}" if a.b_sets else "") + (
+        f" --gen-c {a.gen_c} --c-sets {a.c_sets}" if a.gen_c else "")
+    print(f"# bench/tyre_basis.py{args}   (commit {commit})")
     print("RMS distance of each fitted curve from the true curve over the event's slip range, "
           "% of the true peak (raw: the instrument's force; tyre: the bench model's effects "
           "undone)")
@@ -195,6 +248,9 @@ def main():
             "rows": rec, "summary": table("Shipped recordings, over the slip the tyre was measured on", rec),
             "summary_event": table("Shipped recordings, over the event's whole slip range", rec,
                                    "_event")}
+        if a.b_sets:
+            b = generator_b(brakefit, os.path.join(a.build, "bench", "second_sim"), a.b_sets, tmp)
+            doc["generator_b"] = {"rows": b, "summary": table("Generator B", b)}
         if a.gen_c:
             c = generator_c(brakefit, a.gen_c, a.c_sets, tmp)
             doc["generator_c"] = {"rows": c, "summary": table("Generator C", c)}
