@@ -3,7 +3,7 @@
 //   second_sim --bench roller|ground --effect none|relaxation_length|... [--magnitude X]
 //              [--seed N] [--ripple R] [--speed-step MPS] [--pressure-filter S]
 //              [--pressure-step BAR] [--pressure-noise BAR] [--jitter RATIO] [--ripple-ref R]
-//              [--truth-curve FILE] --out DIR
+//              [--pitch-lag S] [--truth-curve FILE] --out DIR
 // The optional overrides replace the drawn tester export (R: both encoders' relative ripple).
 // Prints the drawn tyre, the truth magnitude and the files written. --truth-curve writes the
 // tyre's steady-state curve at the set's load and pressure (slip,force_n, slip 0 to 1): what a
@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   double magnitude = 0;
   std::uint64_t seed = 1;
   double ripple = -1, speed_step = -1, pressure_filter = -1, pressure_step = -1, jitter = -1,
-         ripple_ref = -1, pressure_noise = -1;  // < 0: as drawn
+         ripple_ref = -1, pressure_noise = -1, pitch_lag = -1;  // < 0: as drawn
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--bench")
@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
       jitter = std::atof(v.c_str());
     else if (k == "--out")
       out = v;
+    else if (k == "--pitch-lag")
+      pitch_lag = std::atof(v.c_str());
     else if (k == "--truth-curve")
       truth_curve = v;
     else {
@@ -74,6 +76,7 @@ int main(int argc, char** argv) {
       if (pressure_step >= 0) r.tester.pressure_step_bar = pressure_step;
       if (jitter >= 0) r.tester.jitter_ratio = jitter;
       if (pressure_noise >= 0) r.tester.pressure_noise_bar = pressure_noise;
+      if (pitch_lag >= 0) r.pitch_lag_s = pitch_lag;
     }
     std::filesystem::create_directories(out);
     std::cout << fmt::format("tyre {} Fz {:.0f} N, {:.2f} bar; effect {} magnitude {:.4g}\n",

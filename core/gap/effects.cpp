@@ -61,10 +61,14 @@ std::span<const EffectParam> effect_params(Effect e) {
   static const std::array<std::vector<EffectParam>, kEffects> table = [] {
     std::array<std::vector<EffectParam>, kEffects> t;
     for (std::size_t i = 0; i < kEffects; ++i) t[i] = {effect_param(static_cast<Effect>(i))};
+    constexpr EffectParam kPitchLag{"pitch_lag_s", 0.0, 0.3, 0.05, true};
     t[static_cast<std::size_t>(Effect::LoadTransfer)].push_back({"kx_load_ratio", 0.0, 3.0, 1.0});
+    t[static_cast<std::size_t>(Effect::LoadTransfer)].push_back(kPitchLag);
+    t[static_cast<std::size_t>(Effect::LoadTransferMeasured)].push_back(kPitchLag);
     auto& shape = t[static_cast<std::size_t>(Effect::LoadTransferShape)];
     shape.push_back({"kx_load_ratio", 0.0, 3.0, 1.0});
     shape.push_back({"e_per_load", -2.0, 2.0, 0.0});
+    shape.push_back(kPitchLag);
     return t;
   }();
   return table[static_cast<std::size_t>(e)];
@@ -212,8 +216,16 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
         const double ratio =
             effect == Effect::LoadTransferMeasured ? kPublishedKxLoadRatio : p[first + 1];
         const double e_slope = effect == Effect::LoadTransferShape ? p[first + 2] : 0.0;
+        const double lag_s = p[first + effect_params(effect).size() - 1];
+        // The load follows the deceleration through the body's pitch: a first-order lag.
+        double decel = r.ref_decel_mps2.empty() ? 0.0 : r.ref_decel_mps2[0];
         for (std::size_t i = 0; i < n; ++i) {
-          const double load = std::max(0.05, 1.0 + q * r.ref_decel_mps2[i]);
+          if (i > 0 && lag_s > 1e-6) {  // implicit Euler: stable at any step, no exp per sample
+            const double dt = r.t_s[i] - r.t_s[i - 1];
+            decel += (r.ref_decel_mps2[i] - decel) * dt / (lag_s + dt);
+          } else
+            decel = r.ref_decel_mps2[i];
+          const double load = std::max(0.05, 1.0 + q * decel);
           d_scale[i] *= load;
           b_scale[i] *= std::pow(load, ratio - 1.0);
           e_add[i] += e_slope * (load - 1.0);

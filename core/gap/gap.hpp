@@ -64,6 +64,9 @@ const char* to_string(Condition c);
 struct EffectParam {
   const char* name;  ///< SI name, e.g. "sigma_m"
   double lo, hi, start;
+  /// The lower end is a value the physics takes (a load that follows the deceleration without a
+  /// lag), not the edge of what the data can say: a fit ending there is not refused for it.
+  bool lo_is_physical = false;
 };
 EffectParam effect_param(Effect e);  ///< the first parameter: the effect's magnitude
 /// All parameters of an effect (load transfer has two: its magnitude and the stiffness ratio).

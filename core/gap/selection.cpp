@@ -53,16 +53,16 @@ Options calibrated_options(Condition c, Options base) {
   return base;
 }
 
-static bool at_bound(double v, double lo, double hi) {
-  const double tol = 0.005 * (hi - lo);
-  return v <= lo + tol || v >= hi - tol;
+static bool at_bound(double v, const EffectParam& p) {
+  const double tol = 0.005 * (p.hi - p.lo);
+  return (!p.lo_is_physical && v <= p.lo + tol) || v >= p.hi - tol;
 }
 
 /// The effect's parameters (the last of the fit's) all inside their physical ranges.
 static bool params_inside(Effect e, const Fit& f) {
   const auto eps = effect_params(e);
   for (std::size_t j = 0; j < eps.size(); ++j)
-    if (at_bound(f.params[f.params.size() - eps.size() + j], eps[j].lo, eps[j].hi)) return false;
+    if (at_bound(f.params[f.params.size() - eps.size() + j], eps[j])) return false;
   return true;
 }
 
@@ -254,7 +254,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       bool inside = true;
       for (std::size_t j = 0; j < eps.size() && inside; ++j) {
         const double v = e.params[j].second;
-        if (!at_bound(v, eps[j].lo, eps[j].hi)) continue;
+        if (!at_bound(v, eps[j])) continue;
         inside = false;
         rep.notes.push_back(fmt::format(
             "{}{} would explain part of the residual only with {} at the end of its physical "

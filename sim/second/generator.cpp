@@ -23,7 +23,7 @@ using State = std::array<double, 3>;
 struct Dynamics {
   const RunCase& c;
   double v_roller_mps = 0;  ///< roller surface speed (roller bench)
-  double decel_mps2 = 0;    ///< the vehicle's deceleration at the last step (load transfer)
+  double decel_mps2 = 0;    ///< the deceleration the load follows (behind the pitch lag)
 
   double line_pressure_bar(double t_s) const {
     const double t0 = c.tester.leading_s;
@@ -143,7 +143,12 @@ std::string simulate_event_csv(const RunCase& c) {
       y = rk4(dyn, t, y, h);
       if (y[0] < 0) y[0] = 0;
       const double v_ref = dyn.ref_speed(y);
-      if (c.bench == can::BenchKind::Ground) dyn.decel_mps2 = std::max(0.0, (before[1] - y[1]) / h);
+      if (c.bench == can::BenchKind::Ground) {
+        // The load follows the body's pitch: the deceleration through a first-order lag.
+        const double decel = std::max(0.0, (before[1] - y[1]) / h);
+        dyn.decel_mps2 += c.pitch_lag_s > 0 ? (decel - dyn.decel_mps2) * h / (c.pitch_lag_s + h)
+                                            : decel - dyn.decel_mps2;
+      }
       angle_ref += v_ref * h / ref_radius;
       angle_wheel += y[0] * h;
       t += h;

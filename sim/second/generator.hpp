@@ -44,6 +44,7 @@ struct RunCase {
   double relaxation_m = 0, time_offset_s = 0, radius_error_ratio = 0, lmuv = 0;
   // the vehicle (ground)
   double mass_kg = 1500, load_per_decel = 0;  ///< relative load change per m/s^2 (0: none)
+  double pitch_lag_s = 0;  ///< the body's pitch: the load follows the deceleration this late
   double other_brakes_ratio = 2.0;  ///< the other wheels' brake force / this wheel's, per bar
   double other_mu = 1.0;            ///< the other wheels' friction limit (x their load)
   TesterExport tester;
