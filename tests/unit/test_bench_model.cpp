@@ -140,9 +140,9 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   gap::Report rep;
   rep.accepted = {gap::Effect::TyreShift, gap::Effect::RelaxationLength, gap::Effect::LoadTransfer,
                   gap::Effect::WheelInertia};
-  // B C D E, tyre shift, sigma, load transfer (q, ratio), inertia
-  rep.after.params = {15, 1.5, 3400, 0.1, 1e-4, 0.2, 0.03, 1.2, 0.9};
-  rep.after.stderr_ = {0, 0, 0, 0, 0, 0.01, 0, 0, 0.05};
+  // B C D E, tyre shift, sigma, load transfer (q, ratio, pitch lag), inertia
+  rep.after.params = {15, 1.5, 3400, 0.1, 1e-4, 0.2, 0.03, 1.2, 0.1, 0.9};
+  rep.after.stderr_ = {0, 0, 0, 0, 0, 0.01, 0, 0, 0, 0.05};
   const gap::BenchModel m = gap::bench_model_from(rep, gap::Condition::Ground);
   EXPECT_EQ(m.condition, "ground");
   ASSERT_EQ(m.effects.size(), 2u);
