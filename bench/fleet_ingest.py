@@ -9,7 +9,8 @@ by it is what the server takes when the stations are elsewhere, as they are.
 
 Starts a PostgreSQL 15 of its own (tests/fleet/pgserver.py: TLS on, fsync off as in the tests),
 gives each station a store of `--events` events (a real brakefitd replay, its rows cloned with new
-uids) and runs `brakefit sync --once` for all stations, eight at a time, measuring:
+uids) and runs `brakefit-sync --once` (the service's binary: `brakefit sync` without the fitting
+libraries) for all stations, `--parallel` at a time, measuring:
   - ingest: events per second into the one server (target >= 5000/s on 2 cores);
   - a station's CPU: sync's CPU seconds per event shipped, and an idle sync's CPU share over 10 s
     (the station's steady state; target < 1 % of a core);
@@ -36,6 +37,7 @@ import pgserver  # noqa: E402
 import test_fleet as tf  # noqa: E402  (the stores are made as the tests make them)
 
 CLI = os.environ["BRAKEFIT_BIN"]
+SYNC = CLI + "-sync"  # brakefit-sync, beside brakefit in the build tree
 
 
 def server_cpu(server):
@@ -92,7 +94,7 @@ def main():
         cpu0, t0, srv0 = children_cpu(), time.time(), server_cpu(server)
         running = []
         for st in stations:
-            running.append(subprocess.Popen([CLI, *st.args(extra=("--once", "--batch", "500"))],
+            running.append(subprocess.Popen([SYNC, *st.args(extra=("--once", "--batch", "500"))[1:]],
                                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE))
             while len([p for p in running if p.poll() is None]) >= a.parallel:
                 time.sleep(0.01)
@@ -104,7 +106,7 @@ def main():
         total = int(server.psql("SELECT count(*) FROM brakefit.events"))
         assert total == a.stations * a.events, total
         # An idle sync (everything shipped): its CPU share over 10 s.
-        idle = subprocess.Popen([CLI, *stations[0].args()], stdout=subprocess.DEVNULL,
+        idle = subprocess.Popen([SYNC, *stations[0].args()[1:]], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL)
         time.sleep(2)
         with open(f"/proc/{idle.pid}/stat") as f:

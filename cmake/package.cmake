@@ -5,7 +5,7 @@ if(NOT BRAKEFIT_HELP2MAN)
   message(FATAL_ERROR "help2man not found (Debian package help2man; scripts/deps.sh installs it)")
 endif()
 
-# brakefit(1) and brakefitd(8) from their help text (cmake/manpage.py) and docs/man/TARGET.h2m.
+# brakefit(1), brakefit-sync(1) and brakefitd(8) from their help text (cmake/manpage.py) and docs/man/TARGET.h2m.
 function(brakefit_manpage target section summary)
   set(out ${PROJECT_BINARY_DIR}/man/${target}.${section}.gz)
   add_custom_command(OUTPUT ${out}
@@ -21,6 +21,7 @@ function(brakefit_manpage target section summary)
 endfunction()
 brakefit_manpage(brakefit 1 "brake-slip identification for roller brake testers")
 brakefit_manpage(brakefitd 8 "roller brake tester data acquisition daemon")
+brakefit_manpage(brakefit-sync 1 "ship a station's brake events to the central PostgreSQL")
 
 # Debian's documentation: copyright, and the changelog compressed as policy wants (gzip -9n).
 set(deb ${PROJECT_SOURCE_DIR}/packaging/deb)

@@ -254,6 +254,24 @@ class Shipping(unittest.TestCase):
         self.assertLessEqual(st["already_there"], 8)
         self.north.assert_exactly_once(self)
 
+    def test_4_brakefit_sync_the_services_lean_binary_ships_as_brakefit_sync_does(self):
+        # brakefit-sync ARGS is brakefit sync ARGS, without Ceres, BLAS or the simulators.
+        sync_bin = CLI + "-sync"
+        libs = subprocess.run(["ldd", sync_bin], capture_output=True, text=True).stdout
+        for lib in ("libceres", "blas", "libgfortran", "libmodbus"):
+            self.assertNotIn(lib, libs)
+        clone_rows(self.north.store, 4)
+        r = subprocess.run([sync_bin, *self.north.args(extra=("--once",))[1:]],
+                           capture_output=True, text=True, timeout=120)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(self.north.status()["shipped"], 4)
+        self.north.assert_exactly_once(self)
+        # Its errors are brakefit's: a usage error is 64 and names the program.
+        r = subprocess.run([sync_bin, "--store", self.north.store], capture_output=True,
+                           text=True, timeout=30)
+        self.assertEqual(r.returncode, 64, r.stderr)
+        self.assertIn("--url is required", r.stderr)
+
     def test_3_a_store_rebuilt_with_new_row_ids_duplicates_nothing(self):
         self.north.once()
         rebuilt = os.path.join(self.north.dir, "rebuilt.db")

@@ -37,6 +37,7 @@ if [ -z "${BRAKEFIT_IN_NS:-}" ]; then
   for f in ./usr/bin/brakefit ./usr/sbin/brakefitd ./lib/systemd/system/brakefitd.service \
       ./lib/udev/rules.d/60-brakefit.rules ./usr/lib/tmpfiles.d/brakefit.conf \
       ./etc/brakefit/brakefitd.toml ./usr/share/brakefit/models/default.json \
+      ./usr/bin/brakefit-sync ./usr/share/man/man1/brakefit-sync.1.gz \
       ./usr/share/man/man1/brakefit.1.gz ./usr/share/man/man8/brakefitd.8.gz \
       ./usr/share/doc/brakefit/copyright ./usr/share/doc/brakefit/changelog.gz; do
     grep -qxF "$f" <<<"$files" || fail "the package lacks $f"
@@ -49,7 +50,8 @@ if [ -z "${BRAKEFIT_IN_NS:-}" ]; then
   fi
   echo "lintian: clean at warning level"
 
-  for page in "$build/man/brakefit.1.gz" "$build/man/brakefitd.8.gz"; do
+  for page in "$build/man/brakefit.1.gz" "$build/man/brakefit-sync.1.gz" \
+      "$build/man/brakefitd.8.gz"; do
     warn=$(LC_ALL=C.UTF-8 MANROFFSEQ='' MANWIDTH=80 man --warnings -l "$page" 2>&1 >/dev/null || true)
     [ -z "$warn" ] || fail "$(basename "$page"): $warn"
     # Every subcommand of the program is in its page.
@@ -112,7 +114,8 @@ fit=$(env -u BRAKEFIT_MODEL chroot "$root" sh -c \
 [[ "$fit" == *"\"model_hash\":\"$checksum\""* ]] || fail "brakefit fit with the installed model: $fit"
 echo "installed: brakefit fit --method som uses /usr/share/brakefit/models/default.json ($checksum)"
 # The man pages are where man looks.
-chroot "$root" man -w brakefit brakefitd >/dev/null || fail "man -w brakefit brakefitd"
+chroot "$root" man -w brakefit brakefit-sync brakefitd >/dev/null ||
+  fail "man -w brakefit brakefit-sync brakefitd"
 # The unit as installed verifies, its Documentation= man page included.
 out=$(chroot "$root" systemd-analyze verify /lib/systemd/system/brakefitd.service 2>&1) \
   || fail "systemd-analyze verify of the installed unit: $out"
