@@ -106,7 +106,6 @@ void add_fit_command(CLI::App& app) {
     std::vector<ParsedCurve> curves;
     curves.reserve(curve_files.size());
     for (const auto& f : curve_files) curves.push_back(parse_curve_csv(read_file(f), f));
-    o->files = curve_files;
     for (const Run& run : runs)
       for (const auto& e : run.events) {
         if (o->json)
@@ -120,7 +119,7 @@ void add_fit_command(CLI::App& app) {
     std::vector<std::vector<MethodResult>> all;
     all.reserve(curves.size());
     for (std::size_t i = 0; i < curves.size(); ++i) {
-      spdlog::debug("fitting {} ({} points)", o->files[i], curves[i].curve.size());
+      spdlog::debug("fitting {} ({} points)", curve_files[i], curves[i].curve.size());
       std::vector<MethodResult> rs;
       rs.reserve(methods.size());
       for (Method m : methods) {
@@ -133,9 +132,9 @@ void add_fit_command(CLI::App& app) {
     for (std::size_t i = 0; i < curves.size(); ++i) {
       const auto& c = curves[i].curve;
       if (!o->plot.empty()) {
-        const std::string path = plot_path_for(o->plot, o->files[i], curves.size());
-        write_file(path, plot::fit_chart_svg(fmt::format("{}: measured vs fitted", o->files[i]), c,
-                                             all[i], unit));
+        const std::string path = plot_path_for(o->plot, curve_files[i], curves.size());
+        write_file(path, plot::fit_chart_svg(fmt::format("{}: measured vs fitted", curve_files[i]),
+                                             c, all[i], unit));
         spdlog::info("plot written to {}", path);
       }
       if (o->json) {
@@ -144,7 +143,7 @@ void add_fit_command(CLI::App& app) {
         doc["version"] = kVersion;
         doc["model_hash"] =
             model ? nlohmann::ordered_json(model->hash) : nlohmann::ordered_json(nullptr);
-        doc["file"] = o->files[i];
+        doc["file"] = curve_files[i];
         doc["slip_unit"] = to_string(curves[i].input_unit);
         doc["points"] = c.size();
         doc["mape_rule"] = kMapeRule;
@@ -154,7 +153,7 @@ void add_fit_command(CLI::App& app) {
         continue;
       }
       const bool pct = unit == SlipUnit::Percent;
-      std::cout << fmt::format("{}: {} points (input slip in {}), model {}\n", o->files[i],
+      std::cout << fmt::format("{}: {} points (input slip in {}), model {}\n", curve_files[i],
                                c.size(), to_string(curves[i].input_unit),
                                model ? model->hash.substr(0, 19) : "none");
       std::cout << fmt::format("  {:<7} {:>10} {:>7} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9}  {}\n",
