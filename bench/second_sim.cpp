@@ -1,6 +1,7 @@
 // Writes one set of generator B's runs (sim/second, the second physics written apart) as event
 // CSVs, the tester's export, for `brakefit gap` or anyone else's tool:
 //   second_sim --bench roller|ground --effect none|relaxation_length|... [--magnitude X]
+//              [--effect2 E --magnitude2 X]   (a second effect in the same set: a pair)
 //              [--seed N] [--ripple R] [--speed-step MPS] [--pressure-filter S]
 //              [--pressure-step BAR] [--pressure-noise BAR] [--jitter RATIO] [--ripple-ref R]
 //              [--pitch-lag S] [--truth-curve FILE] --out DIR
@@ -15,14 +16,15 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "sim/second/generator.hpp"
 
 using namespace brakefit;
 
 int main(int argc, char** argv) {
-  std::string bench = "roller", effect = "none", out, truth_curve;
-  double magnitude = 0;
+  std::string bench = "roller", effect = "none", effect2, out, truth_curve;
+  double magnitude = 0, magnitude2 = 0;
   std::uint64_t seed = 1;
   double ripple = -1, speed_step = -1, pressure_filter = -1, pressure_step = -1, jitter = -1,
          ripple_ref = -1, pressure_noise = -1, pitch_lag = -1;  // < 0: as drawn
@@ -34,6 +36,10 @@ int main(int argc, char** argv) {
       effect = v;
     else if (k == "--magnitude")
       magnitude = std::atof(v.c_str());
+    else if (k == "--effect2")
+      effect2 = v;
+    else if (k == "--magnitude2")
+      magnitude2 = std::atof(v.c_str());
     else if (k == "--seed")
       seed = std::strtoull(v.c_str(), nullptr, 10);
     else if (k == "--ripple")
@@ -66,8 +72,10 @@ int main(int argc, char** argv) {
     return 64;
   }
   try {
+    std::vector<sim2::EffectDraw> effects{{effect, magnitude}};
+    if (!effect2.empty()) effects.push_back({effect2, magnitude2});
     auto set = sim2::draw_set(bench == "roller" ? can::BenchKind::Roller : can::BenchKind::Ground,
-                              effect, magnitude, seed);
+                              effects, seed);
     for (auto& r : set.runs) {
       if (ripple >= 0) r.tester.eccentricity_ref = r.tester.eccentricity_wheel = ripple;
       if (speed_step >= 0) r.tester.speed_step_mps = speed_step;
@@ -82,6 +90,9 @@ int main(int argc, char** argv) {
     std::cout << fmt::format("tyre {} Fz {:.0f} N, {:.2f} bar; effect {} magnitude {:.4g}\n",
                              set.runs.front().tyre.name, set.runs.front().fz_n,
                              set.runs.front().pressure_pa / 1e5, effect, set.magnitude);
+    if (!effect2.empty())
+      std::cout << fmt::format("second effect {} magnitude {:.4g}\n", effect2,
+                               set.magnitudes.back());
     const auto& tx = set.runs.front().tester;
     std::cout << fmt::format(
         "export: speed step {:.2g} m/s, ripple wheel {:.2g} reference {:.2g}, pressure filter "

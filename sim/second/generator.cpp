@@ -241,8 +241,7 @@ double d_ln_d_per_ln_fz(const Mf61Longitudinal& t, double fz_n, double pressure_
 
 }  // namespace
 
-SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitude,
-                 std::uint64_t seed) {
+SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, std::uint64_t seed) {
   Rng rng(seed * 7919 + 17);
   const auto& lib = tyre_library();
   RunCase base;
@@ -283,25 +282,29 @@ SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitu
   base.other_brakes_ratio = 1.0 + 2.0 * rng.uniform(0.3, 0.6);  // the other front + two rears
   base.other_mu = rng.uniform(0.9, 1.1);
   SetDraw out;
-  out.magnitude = magnitude;
-  if (effect == "relaxation_length") base.relaxation_m = magnitude;
-  if (effect == "wheel_inertia") base.inertia_kgm2 = magnitude;
-  if (effect == "brake_threshold") base.threshold_bar = magnitude;
-  if (effect == "time_offset") base.time_offset_s = magnitude;
-  if (effect == "slip_offset") base.radius_error_ratio = -magnitude;
-  if (effect == "speed_friction") base.lmuv = magnitude;
-  if (effect == "load_transfer") {
-    // dFz / Fz per m/s^2 = m h / (2 L Fz0) = h/L / (front share g); D follows through MF 6.1.
-    base.load_per_decel = h_over_l / (front_share * kG);
-    out.magnitude = base.load_per_decel * d_ln_d_per_ln_fz(base.tyre, base.fz_n, base.pressure_pa);
+  for (const auto& [effect, magnitude] : effects) {
+    double truth = magnitude;
+    if (effect == "relaxation_length") base.relaxation_m = magnitude;
+    if (effect == "wheel_inertia") base.inertia_kgm2 = magnitude;
+    if (effect == "brake_threshold") base.threshold_bar = magnitude;
+    if (effect == "time_offset") base.time_offset_s = magnitude;
+    if (effect == "slip_offset") base.radius_error_ratio = -magnitude;
+    if (effect == "speed_friction") base.lmuv = magnitude;
+    if (effect == "load_transfer") {
+      // dFz / Fz per m/s^2 = m h / (2 L Fz0) = h/L / (front share g); D follows through MF 6.1.
+      base.load_per_decel = h_over_l / (front_share * kG);
+      truth = base.load_per_decel * d_ln_d_per_ln_fz(base.tyre, base.fz_n, base.pressure_pa);
+    }
+    if (effect == "misspecified") {
+      base.brush = true;
+      base.brush_tyre.cx_n = mf61_slip_stiffness_n(base.tyre, k);
+      base.brush_tyre.mu_static = peak_n / base.fz_n * rng.uniform(1.0, 1.1);
+      base.brush_tyre.mu_kinetic = base.brush_tyre.mu_static * rng.uniform(0.6, 0.85);
+      base.brush_tyre.v_c_mps = rng.uniform(0.3, 2.0);
+    }
+    out.magnitudes.push_back(truth);
   }
-  if (effect == "misspecified") {
-    base.brush = true;
-    base.brush_tyre.cx_n = mf61_slip_stiffness_n(base.tyre, k);
-    base.brush_tyre.mu_static = peak_n / base.fz_n * rng.uniform(1.0, 1.1);
-    base.brush_tyre.mu_kinetic = base.brush_tyre.mu_static * rng.uniform(0.6, 0.85);
-    base.brush_tyre.v_c_mps = rng.uniform(0.3, 2.0);
-  }
+  out.magnitude = out.magnitudes.empty() ? 0.0 : out.magnitudes.front();
   // Three runs: roller at 5 km/h with three pedal ramps; ground at 30, 50, 70 km/h.
   for (int i = 0; i < 3; ++i) {
     RunCase r = base;
@@ -317,6 +320,11 @@ SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitu
     out.runs.push_back(r);
   }
   return out;
+}
+
+SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitude,
+                 std::uint64_t seed) {
+  return draw_set(bench, std::vector<EffectDraw>{{effect, magnitude}}, seed);
 }
 
 }  // namespace brakefit::sim2

@@ -63,9 +63,17 @@ const std::vector<Mf61Longitudinal>& tyre_library();
 /// load_transfer it is overwritten with the D scale per m/s^2 of the drawn vehicle and tyre).
 struct SetDraw {
   std::vector<RunCase> runs;
-  double magnitude = 0;
+  double magnitude = 0;            ///< the first effect's
+  std::vector<double> magnitudes;  ///< each effect's, in the order given
 };
 SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitude,
                  std::uint64_t seed);
+/// Several effects in one set (the referee's pairs); the tyre, vehicle and export are drawn as
+/// for one effect of the same seed.
+struct EffectDraw {
+  std::string effect;
+  double magnitude = 0;
+};
+SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, std::uint64_t seed);
 
 }  // namespace brakefit::sim2
