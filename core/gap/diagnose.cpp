@@ -32,16 +32,7 @@ void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& f
   rep.gap_after_rmse_n = heldout(runs, rep.accepted, fit);
   rep.floor = noise_floor(runs, rep.before.params);
   rep.noise_n = rep.floor.total_n();
-  // The named effects' estimates: the refit's.
-  std::size_t at = 4;
-  for (Effect e : rep.accepted) {
-    const auto eps = effect_params(e);
-    for (auto& score : rep.effects)
-      if (score.effect == e && score.accepted)
-        for (std::size_t j = 0; j < eps.size() && j < score.params.size(); ++j)
-          score.params[j].second = rep.after.params[at + j];
-    at += eps.size();
-  }
+  take_joint_estimates(rep);  // the named effects' estimates: the refit's
   rep.notes.push_back(fmt::format(
       "with {} named, the encoders' ripple was estimated again from that model's residual ({}); "
       "refitted, the held-out gap after is {:.1f} N ({:.1f} N with the baseline's estimate)",

@@ -183,6 +183,34 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
                     const Fitter& fit, const Options& o, const char* separability_note,
                     bool ripple_per_candidate);
 
+/// A parameter at the end of its physical range (a lower end that is physical, a lag of 0, aside).
+bool at_bound(double v, const EffectParam& p);
+
+/// Two effects named together that neither explains alone (pair_search.cpp).
+struct PairFound {
+  std::vector<Effect> model;  ///< the baseline's terms and the two
+  Fit fit;
+  double heldout_n = 0.0;
+  double gain = 0.0;                            ///< over the baseline's held-out gap
+  double delta_bic = 0.0;                       ///< against the baseline
+  double gain_over_a = 0.0, gain_over_b = 0.0;  ///< the pair against b alone, against a alone
+  EffectScore a, b;                             ///< the members, at the pair fit's values
+};
+/// When forward selection leaves a structured gap (left_n): the leading round-1 candidates (by
+/// held-out gain and by BIC drop) fitted in pairs, lag and delay never together. The best pair
+/// held out is returned when it explains at least min_first_gain of the baseline's gap, beats
+/// what is left by the gain gate, drops the BIC by twice the margin, each member gains the gain
+/// gate over the other alone, and each has the evidence only it leaves.
+std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::vector<Effect>& base,
+                                      const std::vector<EffectScore>& round1, double gap_before_n,
+                                      double left_n, const Fit& base_fit, const Fitter& fit,
+                                      const Options& o);
+
+/// Each accepted effect's parameters become the final model's (rep.after): an effect named in
+/// round 1 is re-estimated beside those named after it, so a pair's magnitudes are the joint
+/// fit's, not the first one's fitted alone.
+void take_joint_estimates(Report& rep);
+
 /// The verdict from the accepted effects (nuisance terms unnamed) and the gap left after them:
 /// `none` or `unexplained` when none is named, `unexplained` appended when a gap is left.
 void name_verdict(Report& rep, const Options& o);

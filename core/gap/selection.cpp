@@ -53,7 +53,7 @@ Options calibrated_options(Condition c, Options base) {
   return base;
 }
 
-static bool at_bound(double v, const EffectParam& p) {
+bool at_bound(double v, const EffectParam& p) {
   const double tol = 0.005 * (p.hi - p.lo);
   return (!p.lo_is_physical && v <= p.lo + tol) || v >= p.hi - tol;
 }
@@ -366,11 +366,56 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       all = pointers(runs);
     }
   };
+  // Two effects that neither explains alone (their bends partly cancel): the leading candidates
+  // in pairs, when a structured gap is left and fewer than two were named.
+  bool pair_named = false;
+  if (named(chosen).size() < 2 && current_heldout > o.noise_factor * rep.noise_n) {
+    std::vector<Run>& entry = entry_runs ? *entry_runs : runs;  // the runs round 1 scored
+    if (auto p = search_pairs(entry, base, rep.effects, rep.gap_before_rmse_n, current_heldout,
+                              rep.before, fit, o)) {
+      const std::string before_names = after_names();
+      for (auto& e : rep.effects)
+        if (e.accepted) {
+          e.accepted = false;
+          e.decision = fmt::format("replaced by the pair {} and {} (see the notes)",
+                                   to_string(p->a.effect), to_string(p->b.effect));
+        }
+      for (EffectScore* m : {&p->a, &p->b}) {
+        const Effect other = m == &p->a ? p->b.effect : p->a.effect;
+        m->accepted = true;
+        m->round = static_cast<int>(o.max_effects);
+        m->decision = fmt::format(
+            "accepted with {} (a pair: together {:.0f} % of the gap; each gains {:.0f} % over "
+            "the other alone)",
+            to_string(other), 100 * p->gain, 100 * (m == &p->a ? p->gain_over_a : p->gain_over_b));
+        rep.effects.push_back(*m);
+      }
+      rep.notes.push_back(fmt::format(
+          "forward selection left {:.1f} N of structured gap ({}); {} and {} fitted together "
+          "leave {:.1f} N held out ({:.0f} % of the gap explained): each alone bends the curve "
+          "against the other, so neither passed by itself; both are named",
+          current_heldout, before_names.empty() ? "nothing named" : before_names + " named",
+          to_string(p->a.effect), to_string(p->b.effect), p->heldout_n, 100 * p->gain));
+      if (entry_runs) {
+        runs = std::move(*entry_runs);
+        entry_runs.reset();
+        all = pointers(runs);
+      }
+      chosen = p->model;
+      current_fit = std::move(p->fit);
+      current_heldout = p->heldout_n;
+      pair_named = true;
+    }
+  }
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
   double first = 0.0;
   for (const auto& e : rep.effects)
     if (named(chosen).size() > 0 && e.effect == named(chosen).front()) first = e.gain;
+  // Two or more named: the share they explain together (a pair's members may each bend the
+  // curve against the other alone).
+  if (pair_named || named(chosen).size() > 1)
+    first = std::max(first, 1.0 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12));
   if (!named(chosen).empty() && current_heldout > o.noise_factor * rep.noise_n &&
       first < o.min_first_gain)
     veto(fmt::format(
@@ -396,7 +441,20 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   rep.accepted = chosen;
   rep.after = current_fit;
   rep.gap_after_rmse_n = current_heldout;
+  take_joint_estimates(rep);
   name_verdict(rep, o);
+}
+
+void take_joint_estimates(Report& rep) {
+  std::size_t at = 4;  // after B, C, D, E
+  for (Effect e : rep.accepted) {
+    const auto eps = effect_params(e);
+    for (auto& score : rep.effects)
+      if (score.effect == e && score.accepted)
+        for (std::size_t j = 0; j < eps.size() && j < score.params.size(); ++j)
+          score.params[j].second = rep.after.params.at(at + j);
+    at += eps.size();
+  }
 }
 
 void name_verdict(Report& rep, const Options& o) {
