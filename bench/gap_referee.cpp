@@ -2,7 +2,7 @@
 //   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
 //               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1]
-//               [--only EFFECT,...] [--why 1|2]
+//               [--only EFFECT,...] [--why 1|2] [--pairs N] [--results FILE [--results-key K]]
 // Three generators make the runs: A, the project's simulator (candump logs), B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export), and C, a physics written outside the project (--gen-c, by default
@@ -21,20 +21,23 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
-#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <iostream>
 #include <map>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
 #include "bench/outside_generator.hpp"
+#include "bench/referee_pairs.hpp"
+#include "bench/referee_results.hpp"
+#include "bench/referee_util.hpp"
 #include "brakefit/version.hpp"
 #include "sim/referee.hpp"
 
@@ -42,38 +45,13 @@ using namespace brakefit;
 
 namespace {
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
-}
-
 int g_threads = 2;
 
-/// results[i] = f(i) for i < n on g_threads threads, with progress every 20 done.
-template <class T>
-std::vector<T> parallel_map(int n, const std::function<T(int)>& f, const std::string& what) {
-  std::vector<T> out(static_cast<std::size_t>(n));
-  std::atomic<int> next{0}, done{0};
-  std::mutex log;
-  auto worker = [&] {
-    for (int i = next++; i < n; i = next++) {
-      out[static_cast<std::size_t>(i)] = f(i);
-      const int d = ++done;
-      if (d % 20 == 0 || d == n) {
-        std::lock_guard lock(log);
-        std::cerr << fmt::format("  {}: {}/{}\n", what, d, n);
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < std::max(1, g_threads); ++t) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
-  return out;
-}
+using bench::quantile;
 
 struct Settings {
   int trials = 200, trials_other = 80, calib = 30, misspecified = 30;
+  int pairs = 0;  ///< --pairs: pair trials per row (A and B, roller and ground)
   double null_share = 0.3;
   std::uint64_t seed = 1;
   std::vector<std::string> only;  ///< --only: run just the trials drawing these effects
@@ -90,8 +68,8 @@ sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Genera
   sim::GateCalibration gates;
   {
     // calibrate_gates is sequential; split its null sets over the threads by hand.
-    const auto per = parallel_map<sim::GateCalibration>(
-        st.calib,
+    const auto per = bench::parallel_map<sim::GateCalibration>(
+        st.calib, g_threads,
         [&](int i) {
           return sim::calibrate_gates(c, 1, kCalibrationSeed0 + static_cast<std::uint64_t>(i),
                                       gap::Options{}, gen);
@@ -139,8 +117,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     if (st.only.empty() || std::find(st.only.begin(), st.only.end(),
                                      draws[static_cast<std::size_t>(t)].effect) != st.only.end())
       kept.push_back(t);
-  const auto results = parallel_map<sim::TrialResult>(
-      static_cast<int>(kept.size()),
+  const auto results = bench::parallel_map<sim::TrialResult>(
+      static_cast<int>(kept.size()), g_threads,
       [&](int k) {
         const int t = kept[static_cast<std::size_t>(k)];
         return sim::run_trial(draws[static_cast<std::size_t>(t)],
@@ -231,6 +209,9 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   j["false_positive_rate_none"] = n_none ? static_cast<double>(fp_none) / n_none : NAN;
   j["null_exactly_none"] = n_none ? static_cast<double>(none_exact) / n_none : NAN;
   j["refused"] = refused;
+  j["counts"] = {{"effects", n_effects}, {"correct", correct_effects}, {"exact", exact_effects},
+                 {"null", n_none},       {"false_positives", fp_none}, {"null_none", none_exact},
+                 {"refused", refused}};
   std::cout << fmt::format(
       "\neffects correct: {}/{} ({:.1f} %; first verdict exactly the injected effect: {:.1f} %), "
       "false positives on none: {}/{} ({:.1f} %), null sets exactly [\"none\"]: {}/{}, sets "
@@ -266,8 +247,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   }
   if (st.misspecified > 0) {
     // Misspecified tyre family (Burckhardt curve, no effect): must give none or unexplained.
-    const auto mis = parallel_map<sim::TrialResult>(
-        st.misspecified,
+    const auto mis = bench::parallel_map<sim::TrialResult>(
+        st.misspecified, g_threads,
         [&](int t) {
           sim::Injection inj;
           inj.effect = "misspecified";
@@ -284,6 +265,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     }
     j["misspecified_trials"] = st.misspecified;
     j["misspecified_none_or_unexplained"] = static_cast<double>(ok) / st.misspecified;
+    j["counts"]["misspecified"] = st.misspecified;
+    j["counts"]["misspecified_ok"] = ok;
     j["misspecified_said"] = said;
     std::cout << fmt::format(
         "misspecified tyre (A, C: Burckhardt, B: brush model): none/unexplained in {}/{}; first "
@@ -292,14 +275,20 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     for (const auto& [k, v] : said) std::cout << fmt::format(" {} {}", k, v);
     std::cout << "\n";
   }
+  if (st.pairs > 0 && trial_gen != sim::Generator::C && c != gap::Condition::RollerToRoad)
+    j.update(bench::run_pairs(c, trial_gen, gates.options,
+                              {st.pairs, st.seed, g_threads, st.why, st.only}, cname),
+             /*merge_objects=*/true);
   return j;
 }
 
 int run(int argc, char** argv) {
+  const auto started = std::chrono::steady_clock::now();
   Settings st;
   std::string which = "all", generators = "A,B";
   std::string gen_c = std::string(BRAKEFIT_SOURCE_DIR) + "/../shared/gapgen/gen_c.py";
-  std::string trials_from;  // --trials-from: only these generators' trials (empty: all)
+  std::string trials_from;           // --trials-from: only these generators' trials (empty: all)
+  std::string results, results_key;  // --results FILE [--results-key KEY]
   bool crossed = true;
   g_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int i = 1; i < argc; i += 2) {
@@ -308,9 +297,13 @@ int run(int argc, char** argv) {
       std::cerr
           << "usage: gap_referee [--condition roller|ground|roller_vs_road|all] [--trials N]\n"
              "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
+             "  [--pairs N]           (pair trials per row: two effects at once, A and B)\n"
              "  [--seed S] [--threads N] [--generators A,B,C] [--gen-c SCRIPT] [--crossed 1|0]\n"
              "  [--trials-from C]      (only these generators' trials; gates from all)\n"
              "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
+             "  [--results FILE [--results-key KEY]]  (the tables into FILE's section KEY,\n"
+             "                         by default the condition and generators; the command\n"
+             "                         and the commit at its head)\n"
              "  [--why 1|2]           (1: each miss's notes, the misses are always listed;\n"
              "                         2: each hit too, with its estimate and gap left)\n";
       return k == "-h" || k == "--help" ? 0 : 64;
@@ -322,6 +315,8 @@ int run(int argc, char** argv) {
       st.trials_other = std::atoi(v);
     else if (k == "--calibrate")
       st.calib = std::max(1, std::atoi(v));
+    else if (k == "--pairs")
+      st.pairs = std::atoi(v);
     else if (k == "--misspecified")
       st.misspecified = std::atoi(v);
     else if (k == "--null-share")
@@ -336,6 +331,10 @@ int run(int argc, char** argv) {
       generators = v;
     else if (k == "--gen-c")
       gen_c = v;
+    else if (k == "--results")
+      results = v;
+    else if (k == "--results-key")
+      results_key = v;
     else if (k == "--trials-from")
       trials_from = v;
     else if (k == "--only") {
@@ -349,6 +348,10 @@ int run(int argc, char** argv) {
       std::cerr << "gap_referee: unknown option " << k << "\n";
       return 64;
     }
+  }
+  if (!results.empty() && !std::ofstream(results, std::ios::app)) {  // before hours of trials
+    std::cerr << "gap_referee: cannot write the results file " << results << "\n";
+    return 73;
   }
   if (generators.find('C') != std::string::npos) {
     if (!std::filesystem::exists(gen_c)) {
@@ -387,6 +390,16 @@ int run(int argc, char** argv) {
     return 64;
   }
   std::cout << "\n" << j.dump() << "\n";
+  if (!results.empty()) {
+    std::string command;
+    for (int i = 0; i < argc; ++i) command += (i ? " " : "") + std::string(argv[i]);
+    const double minutes =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() / 60;
+    bench::write_results_section(
+        results, results_key.empty() ? fmt::format("{} {}", which, generators) : results_key,
+        command, minutes, bench::results_markdown(j));
+    std::cerr << "gap_referee: the tables are in " << results << "\n";
+  }
   return 0;
 }
 

@@ -157,28 +157,62 @@ Injection draw_injection(Rng& rng, double p_none, gap::Condition c, Generator g)
   return inj;
 }
 
-Scenario inject(Scenario s, const Injection& inj) {
-  if (inj.effect == "relaxation_length") s.effects.relaxation_length_m = inj.magnitude;
-  if (inj.effect == "wheel_inertia") {
+Injection draw_pair(Rng& rng, gap::Condition c, Generator g) {
+  Injection inj;
+  inj.condition = c;
+  inj.generator = g;
+  const auto rs = ranges(c, g);
+  if (rs.size() < 2) return inj;
+  auto magnitude = [&](const Range& r) {
+    const double m = rng.uniform(r.lo, r.hi);
+    return r.either_sign && rng.uniform() < 0.5 ? -m : m;
+  };
+  const auto lag_and_delay = [](const std::string& a, const std::string& b) {
+    return (a == "relaxation_length" && b == "time_offset") ||
+           (a == "time_offset" && b == "relaxation_length");
+  };
+  const auto& r1 = rs[rng.index(rs.size())];
+  const Range* r2 = &r1;
+  while (r2->effect == r1.effect || lag_and_delay(r1.effect, r2->effect))
+    r2 = &rs[rng.index(rs.size())];
+  inj.effect = r1.effect;
+  inj.magnitude = magnitude(r1);
+  inj.effect2 = r2->effect;
+  inj.magnitude2 = magnitude(*r2);
+  return inj;
+}
+
+namespace {
+
+void inject_one(Scenario& s, const std::string& effect, double magnitude) {
+  if (effect == "relaxation_length") s.effects.relaxation_length_m = magnitude;
+  if (effect == "wheel_inertia") {
     s.effects.wheel_inertia = true;
-    s.wheel_inertia_kgm2 = inj.magnitude;
+    s.wheel_inertia_kgm2 = magnitude;
   }
-  if (inj.effect == "brake_threshold") s.effects.brake_threshold_bar = inj.magnitude;
-  if (inj.effect == "time_offset") s.effects.time_offset_s = inj.magnitude;
+  if (effect == "brake_threshold") s.effects.brake_threshold_bar = magnitude;
+  if (effect == "time_offset") s.effects.time_offset_s = magnitude;
   // Measured slip 1 - (1 + e) Vw / Vref = k - e (1 - k): an offset of -e (the (1 - k) part is a
   // slip scale, which B takes).
-  if (inj.effect == "slip_offset") s.effects.wheel_radius_error_ratio = -inj.magnitude;
-  if (inj.effect == "load_transfer") {
+  if (effect == "slip_offset") s.effects.wheel_radius_error_ratio = -magnitude;
+  if (effect == "load_transfer") {
     // dFz / Fz = m h / (2 L W) x deceleration (one axle's share on the tested wheel), and D follows
     // Fz with the tyre's own load sensitivity.
     s.effects.load_transfer = true;
-    s.cg_height_m = inj.magnitude / d_ln_d_per_ln_fz(s) * 2.0 * s.wheelbase_m * s.wheel_load_n /
-                    s.vehicle_mass_kg;
+    s.cg_height_m =
+        magnitude / d_ln_d_per_ln_fz(s) * 2.0 * s.wheelbase_m * s.wheel_load_n / s.vehicle_mass_kg;
   }
-  if (inj.effect == "speed_friction") s.effects.speed_friction = inj.magnitude;
-  if (inj.effect == "roller_friction") s.effects.roller_friction = 1.0 / inj.magnitude;
-  if (inj.effect == "cradle_cap") s.effects.cradle_cap_ratio = inj.magnitude / s.wheel_load_n;
-  if (inj.effect == "misspecified") s.tyre.family = TyreMf61::Family::Burckhardt;
+  if (effect == "speed_friction") s.effects.speed_friction = magnitude;
+  if (effect == "roller_friction") s.effects.roller_friction = 1.0 / magnitude;
+  if (effect == "cradle_cap") s.effects.cradle_cap_ratio = magnitude / s.wheel_load_n;
+  if (effect == "misspecified") s.tyre.family = TyreMf61::Family::Burckhardt;
+}
+
+}  // namespace
+
+Scenario inject(Scenario s, const Injection& inj) {
+  inject_one(s, inj.effect, inj.magnitude);
+  if (inj.pair()) inject_one(s, inj.effect2, inj.magnitude2);
   return s;
 }
 
@@ -219,19 +253,50 @@ MfParams pooled_start(const std::vector<gap::Run>& runs) {
 bool TrialResult::exact() const {
   if (verdict.empty()) return false;
   if (truth.effect == "none") return verdict == std::vector<std::string>{"none"};
+  if (truth.pair())
+    return verdict.size() == 2 && ((verdict[0] == truth.effect && verdict[1] == truth.effect2) ||
+                                   (verdict[0] == truth.effect2 && verdict[1] == truth.effect));
   return verdict.front() == truth.effect;
 }
+
+namespace {
+
+/// The diagnosis said `said` and noted that the data cannot separate it from `effect`.
+bool inseparable(const std::vector<std::string>& notes, const std::string& said,
+                 const std::string& effect) {
+  for (const auto& n : notes)
+    if (n.find("cannot separate") != std::string::npos && n.find(said) != std::string::npos &&
+        n.find(effect) != std::string::npos)
+      return true;
+  return false;
+}
+
+}  // namespace
+
+namespace {
+
+bool is_lag(const std::string& e) {
+  return e == "relaxation_length" || e == "time_offset";
+}
+
+}  // namespace
 
 bool TrialResult::correct() const {
   if (exact()) return true;
   if (truth.effect == "misspecified")  // never an invented effect
     return !verdict.empty() && (verdict.front() == "none" || verdict.front() == "unexplained");
   if (verdict.empty() || truth.effect == "none") return false;
-  for (const auto& n : notes)
-    if (n.find("cannot separate") != std::string::npos &&
-        n.find(verdict.front()) != std::string::npos && n.find(truth.effect) != std::string::npos)
-      return true;
-  return false;
+  if (truth.pair()) {
+    const auto named = [&](const std::string& e) {
+      for (const auto& v : verdict)
+        if (v == e || inseparable(notes, v, e) || (one_speed && is_lag(v) && is_lag(e)))
+          return true;
+      return false;
+    };
+    return named(truth.effect) && named(truth.effect2);
+  }
+  if (one_speed && is_lag(verdict.front()) && is_lag(truth.effect)) return true;
+  return inseparable(notes, verdict.front(), truth.effect);
 }
 
 namespace {
@@ -242,13 +307,18 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   t.verdict = rep.verdict;
   t.notes = rep.notes;
   t.estimate = NAN;
+  t.estimate2 = NAN;
   // The accepted score's when it was named (forward selection appends it after round 1's).
-  bool accepted = false;
-  for (const auto& e : rep.effects)
-    if (inj.effect == gap::to_string(e.effect) && (e.accepted || !accepted)) {
-      t.estimate = e.params.front().second;
-      accepted = e.accepted;
-    }
+  const auto estimate = [&](const std::string& effect, double& out) {
+    bool accepted = false;
+    for (const auto& e : rep.effects)
+      if (effect == gap::to_string(e.effect) && (e.accepted || !accepted)) {
+        out = e.params.front().second;
+        accepted = e.accepted;
+      }
+  };
+  estimate(inj.effect, t.estimate);
+  if (inj.pair()) estimate(inj.effect2, t.estimate2);
   t.gap_before_n = rep.gap_before_rmse_n;
   t.gap_after_n = rep.gap_after_rmse_n;
   t.noise_n = rep.noise_n;
@@ -260,8 +330,11 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
 std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, double sample_hz) {
   const auto bench =
       inj.condition == gap::Condition::Ground ? can::BenchKind::Ground : can::BenchKind::Roller;
-  sim2::SetDraw set = sim2::draw_set(bench, inj.effect, inj.magnitude, seed);
-  inj.magnitude = set.magnitude;
+  std::vector<sim2::EffectDraw> effects{{inj.effect, inj.magnitude}};
+  if (inj.pair()) effects.push_back({inj.effect2, inj.magnitude2});
+  sim2::SetDraw set = sim2::draw_set(bench, effects, seed);
+  inj.magnitude = set.magnitudes.front();
+  if (inj.pair()) inj.magnitude2 = set.magnitudes.back();
   if (sample_hz > 0)
     for (auto& run : set.runs) run.tester.sample_hz = sample_hz;
   std::vector<gap::Run> out;
@@ -295,6 +368,8 @@ namespace {
 /// pooled points, as `brakefit gap` does without a model).
 gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
                            const gap::Options& o) {
+  if (inj.pair() && (inj.generator == Generator::C || c == gap::Condition::RollerToRoad))
+    throw InputError("pairs are drawn by generators A and B, roller and ground");
   if (inj.generator == Generator::C) {
     if (c == gap::Condition::RollerToRoad || !g_outside)
       throw InputError("generator C makes roller and ground runs, through the referee's runner");
@@ -331,7 +406,9 @@ TrialResult run_trial(const Injection& inj_in, std::uint64_t seed, const gap::Op
   Injection inj = inj_in;
   try {
     const gap::Report rep = diagnose_blind(inj.condition, inj, seed, o);
-    return score(inj, rep);
+    TrialResult r = score(inj, rep);
+    r.one_speed = inj.generator == Generator::A || inj.condition != gap::Condition::Ground;
+    return r;
   } catch (const InputError& e) {
     // A set the diagnosis refuses is scored as a wrong answer, never dropped from the table.
     TrialResult r;
@@ -346,7 +423,9 @@ TrialResult run_trial(const Injection& inj_in, std::uint64_t seed, const gap::Op
 TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t seed,
                       const gap::Options& o) {
   const auto runs = simulate_runs(inject(base, inj), seed);
-  return score(inj, gap::diagnose(runs, pooled_start(runs), o));
+  TrialResult r = score(inj, gap::diagnose(runs, pooled_start(runs), o));
+  r.one_speed = true;  // A's runs
+  return r;
 }
 
 GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,

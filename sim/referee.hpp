@@ -32,12 +32,19 @@ struct Injection {
   double magnitude = 0.0;       ///< in the diagnosis parameter's unit (sigma_m, p0_bar, ...)
   gap::Condition condition = gap::Condition::Roller;
   Generator generator = Generator::A;  ///< B: roller and ground conditions only
+  /// A second effect injected with the first (a pair; A and B, roller and ground), "" for none.
+  std::string effect2 = {};
+  double magnitude2 = 0.0;
+  bool pair() const { return !effect2.empty(); }
 };
 
 /// The effects the referee draws in a condition (besides none) and their magnitude ranges.
 const std::vector<std::string>& referee_effects(gap::Condition c, Generator g = Generator::A);
 Injection draw_injection(Rng& rng, double p_none, gap::Condition c = gap::Condition::Roller,
                          Generator g = Generator::A);
+/// Two different effects of the condition, each in its range. Lag and delay are not drawn
+/// together: at one speed they are one effect (the referee's runs of a set share a speed).
+Injection draw_pair(Rng& rng, gap::Condition c, Generator g = Generator::A);
 /// Generator B: three runs (roller: three pedal ramps; ground: 30, 50, 70 km/h) exported as event
 /// CSVs, read back through parse_event_csv and the pipeline, conditioned. The injection's
 /// magnitude is set to the drawn truth where the vehicle decides it (load transfer).
@@ -62,12 +69,19 @@ struct TrialResult {
   Injection truth;
   std::vector<std::string> verdict;
   std::vector<std::string> notes;  ///< "cannot separate A from B" notes of the diagnosis
-  double estimate = 0.0;  ///< the injected effect's parameter when fitted alone (NaN for none)
+  double estimate = 0.0;   ///< the injected effect's parameter when fitted alone (NaN for none)
+  double estimate2 = 0.0;  ///< a pair's second effect's, as estimate
   double gap_before_n = 0.0, gap_after_n = 0.0, noise_n = 0.0;
+  /// The set's runs share one speed (A's runs; B's and C's roller runs): there a relaxation
+  /// (sigma / V) and a time offset are one lag, and either name counts for the other.
+  bool one_speed = false;
   /// The first verdict is the injected effect, or the diagnosis named both in a "cannot
   /// separate" note (an honest answer: the data do not tell them apart); none: exactly ["none"].
+  /// A pair: both effects are in the verdict (either may be covered by a "cannot separate"
+  /// note naming it and the effect said in its place).
   bool correct() const;
-  bool exact() const;  ///< the first verdict is the injected effect (or ["none"])
+  bool exact() const;  ///< the first verdict is the injected effect (or ["none"]); a pair: the
+                       ///< verdict is exactly the two effects, in either order
 };
 /// Generator C's runs for an injection (roller and ground conditions): may set the injection's
 /// magnitude to the truth in the diagnosis parameter's unit. Throws InputError on a set it cannot

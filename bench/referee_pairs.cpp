@@ -1,0 +1,89 @@
+#include "bench/referee_pairs.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <map>
+#include <vector>
+
+#include "bench/referee_util.hpp"
+
+namespace brakefit::bench {
+
+nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
+                                 const gap::Options& gates, const PairSettings& st,
+                                 const std::string& cname) {
+  nlohmann::ordered_json j;
+  // Their own draws (the single-effect trials' draws and seeds stay as they were).
+  Rng rng(st.seed0 + 300 * static_cast<std::uint64_t>(c) + 7);
+  std::vector<sim::Injection> draws;
+  std::vector<int> kept;
+  const auto wanted = [&](const std::string& e) {
+    return std::find(st.only.begin(), st.only.end(), e) != st.only.end();
+  };
+  for (int t = 0; t < st.n; ++t) {
+    draws.push_back(sim::draw_pair(rng, c, trial_gen));
+    if (st.only.empty() || wanted(draws.back().effect) || wanted(draws.back().effect2))
+      kept.push_back(t);
+  }
+  const int n = static_cast<int>(kept.size());
+  const auto results = parallel_map<sim::TrialResult>(
+      n, st.threads,
+      [&](int k) {
+        const auto t = static_cast<std::uint64_t>(kept[static_cast<std::size_t>(k)]);
+        return sim::run_trial(
+            draws[t], st.seed0 * 1000 + 700'000 + t + 100'000 * static_cast<std::uint64_t>(c),
+            gates);
+      },
+      cname + " pairs");
+  int both = 0, exact = 0, refused = 0;
+  // Per effect: in how many pairs it was drawn and named; its magnitude error where named.
+  std::map<std::string, int> drawn, named;
+  std::map<std::string, std::vector<double>> err;
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    const auto& r = results[k];
+    const auto& inj = r.truth;
+    both += r.correct();
+    exact += r.exact();
+    refused += !r.verdict.empty() && r.verdict.front() == "refused";
+    for (const auto& [e, m, est] : {std::tuple{inj.effect, inj.magnitude, r.estimate},
+                                    std::tuple{inj.effect2, inj.magnitude2, r.estimate2}}) {
+      ++drawn[e];
+      const bool said = std::find(r.verdict.begin(), r.verdict.end(), e) != r.verdict.end();
+      named[e] += said;
+      if (said && std::isfinite(est)) err[e].push_back(std::abs(est - m) / std::abs(m));
+    }
+    if (!r.correct() || st.why > 1)
+      std::cerr << fmt::format(
+          "[{}] pair {}: {} {:.4g} + {} {:.4g} said {} (estimates {:.4g}, {:.4g})\n", cname,
+          kept[k], inj.effect, inj.magnitude, inj.effect2, inj.magnitude2,
+          fmt::join(r.verdict, ", "), r.estimate, r.estimate2);
+    if (!r.correct() && st.why)
+      for (const auto& note : r.notes) std::cerr << "    " << note << "\n";
+  }
+  std::cout << fmt::format(
+      "\npairs: both named {}/{} ({:.1f} %), exactly the two {}/{}, refused {}\n", both, n,
+      100.0 * both / std::max(1, n), exact, n, refused);
+  std::cout << "\n| effect in a pair | drawn | named | magnitude error where named: median, p90 "
+               "|\n|---|---|---|---|\n";
+  for (const auto& [e, d] : drawn) {
+    const auto& v = err[e];
+    std::cout << fmt::format("| {} | {} | {} | {:.1f} %, {:.1f} % |\n", e, d, named[e],
+                             100 * quantile(v, 0.5), 100 * quantile(v, 0.9));
+    j["pair_effects"][e] = {{"drawn", d},
+                            {"named", named[e]},
+                            {"magnitude_error_named_median", quantile(v, 0.5)},
+                            {"magnitude_error_named_p90", quantile(v, 0.9)}};
+  }
+  j["counts"] = {{"pairs", n}, {"pairs_both", both}, {"pairs_exact", exact}};
+  j["pair_trials"] = n;
+  j["pairs_both_named"] = n ? static_cast<double>(both) / n : NAN;
+  j["pairs_exact"] = n ? static_cast<double>(exact) / n : NAN;
+  j["pairs_refused"] = refused;
+  return j;
+}
+
+}  // namespace brakefit::bench

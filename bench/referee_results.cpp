@@ -1,0 +1,143 @@
+#include "bench/referee_results.hpp"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+namespace brakefit::bench {
+
+namespace {
+
+std::string share(const nlohmann::ordered_json& c, const char* num, const char* den) {
+  if (!c.contains(num) || !c.contains(den)) return "–";
+  const int n = c[num].get<int>(), d = c[den].get<int>();
+  if (d == 0) return "–";
+  return n == d || n == 0 ? fmt::format("{}/{}", n, d)
+                          : fmt::format("{}/{} = {:.1f} %", n, d, 100.0 * n / d);
+}
+
+double num(const nlohmann::ordered_json& j, const char* key) {
+  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : NAN;
+}
+
+/// A share in percent, "–" where nothing was measured.
+std::string percent(double x) {
+  return std::isfinite(x) ? fmt::format("{:.1f} %", 100 * x) : "–";
+}
+
+std::string row_name(const nlohmann::ordered_json& r) {
+  const std::string trials = r["trial_generator"], gates = r["gate_generator"];
+  return fmt::format("| {} | {} | {}{} ", r["condition"].get<std::string>(), trials, gates,
+                     trials == gates ? "" : " (crossed)");
+}
+
+/// `git rev-parse --short HEAD` of the source tree, "-dirty" when it has changes.
+std::string source_commit() {
+  auto run = [](const std::string& cmd) {
+    std::string out;
+    std::unique_ptr<FILE, int (*)(FILE*)> p(popen(cmd.c_str(), "r"), pclose);
+    if (!p) return out;
+    std::array<char, 256> buf{};
+    while (fgets(buf.data(), static_cast<int>(buf.size()), p.get())) out += buf.data();
+    return out;
+  };
+  const std::string dir = BRAKEFIT_SOURCE_DIR;
+  std::string head = run("git -C '" + dir + "' rev-parse --short HEAD 2>/dev/null");
+  while (!head.empty() && (head.back() == '\n' || head.back() == ' ')) head.pop_back();
+  if (head.empty()) return "unknown (not a git tree)";
+  if (!run("git -C '" + dir + "' status --porcelain --untracked-files=no 2>/dev/null").empty())
+    head += "-dirty";
+  return head;
+}
+
+}  // namespace
+
+std::string results_markdown(const nlohmann::ordered_json& doc) {
+  std::string out;
+  if (!doc.contains("conditions")) return out;
+  const auto& rows = doc["conditions"];
+  out +=
+      "| condition | trials | gates | effects correct | exactly first | false positives | null "
+      "`[\"none\"]` | misspecified none/unexplained | refused | gap after / floor, median (p90) "
+      "|\n|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& r : rows) {
+    const auto& c = r["counts"];
+    out += row_name(r) +
+           fmt::format("| {} | {:.1f} % | {} | {} | {} | {} | {:.2f} ({:.2f}) |\n",
+                       share(c, "correct", "effects"), 100 * num(r, "accuracy_effects_exact"),
+                       share(c, "false_positives", "null"), share(c, "null_none", "null"),
+                       share(c, "misspecified_ok", "misspecified"), c.value("refused", 0),
+                       num(r["gap_after_over_noise"], "median"),
+                       num(r["gap_after_over_noise"], "p90"));
+  }
+  bool pairs = false;
+  for (const auto& r : rows) pairs |= r["counts"].contains("pairs");
+  if (pairs) {
+    out +=
+        "\nPairs (two effects in one set; each effect: named / drawn, magnitude error where "
+        "named, median):\n\n| condition | trials | gates | both named | exactly the two | each "
+        "effect |\n|---|---|---|---|---|---|\n";
+    for (const auto& r : rows) {
+      const auto& c = r["counts"];
+      if (!c.contains("pairs")) continue;
+      std::string each;
+      for (const auto& [e, v] : r["pair_effects"].items())
+        each += fmt::format("{}{} {}/{}, {}", each.empty() ? "" : "; ", e, v["named"].get<int>(),
+                            v["drawn"].get<int>(), percent(num(v, "magnitude_error_named_median")));
+      out += row_name(r) + fmt::format("| {} | {} | {} |\n", share(c, "pairs_both", "pairs"),
+                                       share(c, "pairs_exact", "pairs"), each);
+    }
+  }
+  out += "\nMagnitude error where named, single effects, median (p90):\n\n";
+  for (const auto& r : rows) {
+    if (!r.contains("magnitude_error_named")) continue;
+    std::string each;
+    for (const auto& [e, v] : r["magnitude_error_named"].items())
+      each += fmt::format("{}{} {} ({})", each.empty() ? "" : "; ", e, percent(num(v, "median")),
+                          percent(num(v, "p90")));
+    const std::string trials = r["trial_generator"], gates = r["gate_generator"];
+    out += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(), trials, gates,
+                       each);
+  }
+  return out;
+}
+
+void write_results_section(const std::string& file, const std::string& key,
+                           const std::string& command, double minutes, const std::string& body) {
+  std::string text;
+  {
+    std::ifstream in(file);
+    if (in) {
+      std::stringstream ss;
+      ss << in.rdbuf();
+      text = ss.str();
+    }
+  }
+  const std::string begin = fmt::format("<!-- gap_referee {} begin -->", key),
+                    end = fmt::format("<!-- gap_referee {} end -->", key);
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::array<char, 32> date{};
+  std::strftime(date.data(), date.size(), "%Y-%m-%d", std::gmtime(&now));
+  const std::string section =
+      fmt::format("{}\n<!-- written by `{}` at commit {} ({}, {:.0f} min) -->\n\n{}{}", begin,
+                  command, source_commit(), date.data(), minutes, body, end);
+  const auto b = text.find(begin);
+  const auto e = b == std::string::npos ? std::string::npos : text.find(end, b);
+  if (b != std::string::npos && e != std::string::npos)
+    text.replace(b, e + end.size() - b, section);
+  else
+    text += (text.empty() || text.back() == '\n' ? "\n" : "\n\n") + section + "\n";
+  std::ofstream out(file, std::ios::trunc);
+  out << text;
+  if (!out) throw std::runtime_error("gap_referee: cannot write the results file " + file);
+}
+
+}  // namespace brakefit::bench

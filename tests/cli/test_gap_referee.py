@@ -1,0 +1,67 @@
+"""The gap referee writes its own results file (issue 34): the tables of a run in a section of
+a Markdown file, with the command and the commit at its head; a later run of the same key
+replaces its section and leaves the rest of the file as it was."""
+import os
+import re
+import subprocess
+import tempfile
+import unittest
+
+from test_cli import ROOT
+
+REFEREE = os.environ.get("BRAKEFIT_REFEREE_BIN",
+                         os.path.join(ROOT, "build", "release", "bench", "gap_referee"))
+
+
+def read(path):
+    with open(path) as f:
+        return f.read()
+
+
+def referee(*args):
+    return subprocess.run([REFEREE, "--condition", "roller", "--generators", "A", "--calibrate",
+                           "1", "--misspecified", "1", "--threads", "2", *args],
+                          capture_output=True, text=True, timeout=600)
+
+
+class RefereeResults(unittest.TestCase):
+    def test_tables_go_into_their_section_and_a_rerun_replaces_it(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "results.md")
+            with open(path, "w") as f:
+                f.write("# Results\n\nWritten by hand, kept.\n")
+            r = referee("--trials", "3", "--pairs", "1", "--results", path)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            text = read(path)
+            self.assertTrue(text.startswith("# Results\n\nWritten by hand, kept.\n"))
+            head = re.search(r"<!-- written by `(.*?)` at commit (\S+) \((\d{4}-\d\d-\d\d), \d+ min\)",
+                             text)
+            self.assertIsNotNone(head, text)
+            self.assertIn("--trials 3 --pairs 1", head.group(1))
+            self.assertNotEqual(head.group(2), "")
+            self.assertIn("| roller | A | A | ", text)
+            self.assertIn("both named", text)  # the pairs' table
+            # Three trials of the referee's draws: the row counts what was drawn.
+            row = re.search(r"\| roller \| A \| A \| (\d+)/(\d+)", text)
+            null = re.search(r"\| (\d+)/(\d+)(?: = [\d.]+ %)? \| (\d+)/(\d+) \| (\d+)/1 \|", text)
+            self.assertIsNotNone(row, text)
+            self.assertIsNotNone(null, text)
+            self.assertEqual(int(row.group(2)) + int(null.group(2)), 3)
+
+            r = referee("--trials", "2", "--results", path)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            again = read(path)
+            self.assertEqual(again.count("<!-- gap_referee roller A begin -->"), 1)
+            self.assertEqual(again.count("<!-- gap_referee roller A end -->"), 1)
+            self.assertIn("--trials 2 --results", again)
+            self.assertNotIn("both named", again)  # this run drew no pairs
+            self.assertTrue(again.startswith("# Results\n\nWritten by hand, kept.\n"))
+
+    def test_an_unwritable_results_file_is_an_error_naming_it(self):
+        r = referee("--trials", "1", "--results", "/nonexistent/dir/results.md")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("/nonexistent/dir/results.md", r.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
