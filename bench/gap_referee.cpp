@@ -284,6 +284,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
 
 int run(int argc, char** argv) {
   const auto started = std::chrono::steady_clock::now();
+  const std::string commit = bench::source_commit();
   Settings st;
   std::string which = "all", generators = "A,B";
   std::string gen_c = std::string(BRAKEFIT_SOURCE_DIR) + "/../shared/gapgen/gen_c.py";
@@ -397,7 +398,7 @@ int run(int argc, char** argv) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() / 60;
     bench::write_results_section(
         results, results_key.empty() ? fmt::format("{} {}", which, generators) : results_key,
-        command, minutes, bench::results_markdown(j));
+        command, commit, minutes, bench::results_markdown(j));
     std::cerr << "gap_referee: the tables are in " << results << "\n";
   }
   return 0;

@@ -39,7 +39,8 @@ std::string row_name(const nlohmann::ordered_json& r) {
                      trials == gates ? "" : " (crossed)");
 }
 
-/// `git rev-parse --short HEAD` of the source tree, "-dirty" when it has changes.
+}  // namespace
+
 std::string source_commit() {
   auto run = [](const std::string& cmd) {
     std::string out;
@@ -57,8 +58,6 @@ std::string source_commit() {
     head += "-dirty";
   return head;
 }
-
-}  // namespace
 
 std::string results_markdown(const nlohmann::ordered_json& doc) {
   std::string out;
@@ -111,7 +110,8 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
 }
 
 void write_results_section(const std::string& file, const std::string& key,
-                           const std::string& command, double minutes, const std::string& body) {
+                           const std::string& command, const std::string& commit, double minutes,
+                           const std::string& body) {
   std::string text;
   {
     std::ifstream in(file);
@@ -128,7 +128,7 @@ void write_results_section(const std::string& file, const std::string& key,
   std::strftime(date.data(), date.size(), "%Y-%m-%d", std::gmtime(&now));
   const std::string section =
       fmt::format("{}\n<!-- written by `{}` at commit {} ({}, {:.0f} min) -->\n\n{}{}", begin,
-                  command, source_commit(), date.data(), minutes, body, end);
+                  command, commit, date.data(), minutes, body, end);
   const auto b = text.find(begin);
   const auto e = b == std::string::npos ? std::string::npos : text.find(end, b);
   if (b != std::string::npos && e != std::string::npos)

@@ -10,10 +10,15 @@ namespace brakefit::bench {
 /// document.
 std::string results_markdown(const nlohmann::ordered_json& doc);
 
+/// `git rev-parse --short HEAD` of the source tree the referee was built from, "-dirty" when it
+/// has changes to tracked files (taken when the run starts).
+std::string source_commit();
+
 /// Puts body into file between `<!-- gap_referee KEY begin -->` and `<!-- gap_referee KEY end
-/// -->` (replacing what was there, or appended), with the command, the source tree's commit, the
-/// date and the run's minutes at its head. Throws std::runtime_error naming the file on failure.
+/// -->` (replacing what was there, or appended), with the command, the commit, the date and the
+/// run's minutes at its head. Throws std::runtime_error naming the file on failure.
 void write_results_section(const std::string& file, const std::string& key,
-                           const std::string& command, double minutes, const std::string& body);
+                           const std::string& command, const std::string& commit, double minutes,
+                           const std::string& body);
 
 }  // namespace brakefit::bench
