@@ -2,7 +2,8 @@
 //   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
 //               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1]
-//               [--only EFFECT,...] [--why 1|2] [--pairs N] [--results FILE [--results-key K]]
+//               [--only EFFECT,...] [--why 1|2] [--pairs N] [--detection SETS]
+//               [--results FILE [--results-key K]]
 // Three generators make the runs: A, the project's simulator (candump logs), B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export), and C, a physics written outside the project (--gen-c, by default
@@ -35,6 +36,7 @@
 #include <thread>
 
 #include "bench/outside_generator.hpp"
+#include "bench/referee_detection.hpp"
 #include "bench/referee_pairs.hpp"
 #include "bench/referee_results.hpp"
 #include "bench/referee_util.hpp"
@@ -52,6 +54,7 @@ using bench::quantile;
 struct Settings {
   int trials = 200, trials_other = 80, calib = 30, misspecified = 30;
   int pairs = 0;  ///< --pairs: pair trials per row (A and B, roller and ground)
+  int detection = 0, detection_levels = 6;  ///< --detection: sets per magnitude (straight rows)
   double null_share = 0.3;
   std::uint64_t seed = 1;
   std::vector<std::string> only;  ///< --only: run just the trials drawing these effects
@@ -279,6 +282,10 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     j.update(bench::run_pairs(c, trial_gen, gates.options,
                               {st.pairs, st.seed, g_threads, st.why, st.only}, cname),
              /*merge_objects=*/true);
+  if (st.detection > 0 && trial_gen == gate_gen && c != gap::Condition::RollerToRoad)
+    j.update(bench::run_detection(c, trial_gen, gates.options,
+                                  {st.detection, st.detection_levels, g_threads, st.seed}, cname),
+             /*merge_objects=*/true);
   return j;
 }
 
@@ -302,6 +309,8 @@ int run(int argc, char** argv) {
              "  [--seed S] [--threads N] [--generators A,B,C] [--gen-c SCRIPT] [--crossed 1|0]\n"
              "  [--trials-from C]      (only these generators' trials; gates from all)\n"
              "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
+             "  [--detection SETS [--detection-levels L]]  (detection curves: SETS sets at\n"
+             "                         each of L magnitudes per effect, straight rows)\n"
              "  [--results FILE [--results-key KEY]]  (the tables into FILE's section KEY,\n"
              "                         by default the condition and generators; the command\n"
              "                         and the commit at its head)\n"
@@ -332,6 +341,10 @@ int run(int argc, char** argv) {
       generators = v;
     else if (k == "--gen-c")
       gen_c = v;
+    else if (k == "--detection")
+      st.detection = std::atoi(v);
+    else if (k == "--detection-levels")
+      st.detection_levels = std::max(2, std::atoi(v));
     else if (k == "--results")
       results = v;
     else if (k == "--results-key")

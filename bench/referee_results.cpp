@@ -95,6 +95,29 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
                                        share(c, "pairs_exact", "pairs"), each);
     }
   }
+  bool detection = false;
+  for (const auto& r : rows) detection |= r.contains("detection");
+  if (detection) {
+    out +=
+        "\nDetection (sets that name the effect at each magnitude, in the parameter's unit; the "
+        "smallest magnitude from which 90 % or more are named):\n\n| condition | trials | "
+        "gates | effect | named at each magnitude | named in 90 % from "
+        "|\n|---|---|---|---|---|---|\n";
+    for (const auto& r : rows) {
+      if (!r.contains("detection")) continue;
+      for (const auto& [e, v] : r["detection"].items()) {
+        std::string cells;
+        for (const auto& p : v["curve"])
+          cells += fmt::format("{}{:.3g}: {}/{}", cells.empty() ? "" : ", ",
+                               p["magnitude"].get<double>(), p["named"].get<int>(),
+                               p["sets"].get<int>());
+        const double from = num(v, "smallest_named_90");
+        out += row_name(r) +
+               fmt::format("| {} | {} | {} |\n", e, cells,
+                           std::isfinite(from) ? fmt::format("{:.3g}", from) : "not reached");
+      }
+    }
+  }
   out += "\nMagnitude error where named, single effects, median (p90):\n\n";
   for (const auto& r : rows) {
     if (!r.contains("magnitude_error_named")) continue;

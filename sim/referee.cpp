@@ -157,6 +157,13 @@ Injection draw_injection(Rng& rng, double p_none, gap::Condition c, Generator g)
   return inj;
 }
 
+std::pair<double, double> effect_range(gap::Condition c, Generator g, const std::string& effect) {
+  for (const auto& r : ranges(c, g))
+    if (effect == r.effect) return {r.lo, r.hi};
+  throw InputError(fmt::format("the referee draws no {} in {} from generator {}", effect,
+                               gap::to_string(c), to_string(g)));
+}
+
 Injection draw_pair(Rng& rng, gap::Condition c, Generator g) {
   Injection inj;
   inj.condition = c;

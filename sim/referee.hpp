@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/gap/gap.hpp"
@@ -42,6 +43,9 @@ struct Injection {
 const std::vector<std::string>& referee_effects(gap::Condition c, Generator g = Generator::A);
 Injection draw_injection(Rng& rng, double p_none, gap::Condition c = gap::Condition::Roller,
                          Generator g = Generator::A);
+/// The range an effect's magnitude is drawn from (lo, hi of its size; either sign is drawn where
+/// the effect has one). Throws InputError for an effect the condition does not draw.
+std::pair<double, double> effect_range(gap::Condition c, Generator g, const std::string& effect);
 /// Two different effects of the condition, each in its range. Lag and delay are not drawn
 /// together: at one speed they are one effect (the referee's runs of a set share a speed).
 Injection draw_pair(Rng& rng, gap::Condition c, Generator g = Generator::A);

@@ -30,17 +30,25 @@ class RefereeResults(unittest.TestCase):
             path = os.path.join(tmp, "results.md")
             with open(path, "w") as f:
                 f.write("# Results\n\nWritten by hand, kept.\n")
-            r = referee("--trials", "3", "--pairs", "1", "--results", path)
+            r = referee("--trials", "3", "--pairs", "1", "--detection", "1", "--detection-levels",
+                        "2", "--results", path)
             self.assertEqual(r.returncode, 0, r.stderr)
             text = read(path)
             self.assertTrue(text.startswith("# Results\n\nWritten by hand, kept.\n"))
             head = re.search(r"<!-- written by `(.*?)` at commit (\S+) \((\d{4}-\d\d-\d\d), \d+ min\)",
                              text)
             self.assertIsNotNone(head, text)
-            self.assertIn("--trials 3 --pairs 1", head.group(1))
+            self.assertIn("--trials 3 --pairs 1 --detection 1", head.group(1))
             self.assertNotEqual(head.group(2), "")
             self.assertIn("| roller | A | A | ", text)
             self.assertIn("both named", text)  # the pairs' table
+            # A detection curve per roller effect of A: two magnitudes, one set each.
+            curves = re.findall(r"\| roller \| A \| A \| (\w+) \| ([^|]*) \| ([^|]*) \|", text)
+            self.assertEqual(sorted(c[0] for c in curves),
+                             sorted(["relaxation_length", "wheel_inertia", "brake_threshold",
+                                     "time_offset", "slip_offset", "cradle_cap"]), text)
+            for _, cells, _ in curves:
+                self.assertEqual(len(re.findall(r"[\d.e+-]+: [01]/1", cells)), 2, cells)
             # Three trials of the referee's draws: the row counts what was drawn.
             row = re.search(r"\| roller \| A \| A \| (\d+)/(\d+)", text)
             null = re.search(r"\| (\d+)/(\d+)(?: = [\d.]+ %)? \| (\d+)/(\d+) \| (\d+)/1 \|", text)
@@ -55,6 +63,7 @@ class RefereeResults(unittest.TestCase):
             self.assertEqual(again.count("<!-- gap_referee roller A end -->"), 1)
             self.assertIn("--trials 2 --results", again)
             self.assertNotIn("both named", again)  # this run drew no pairs
+            self.assertNotIn("Detection", again)
             self.assertTrue(again.startswith("# Results\n\nWritten by hand, kept.\n"))
 
     def test_an_unwritable_results_file_is_an_error_naming_it(self):
