@@ -138,6 +138,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   // that name it, where the diagnosis claims the magnitude.
   std::map<std::string, std::vector<double>> mag_err, mag_err_named, after_by_effect;
   std::vector<double> after_over_noise;
+  std::vector<double> load_ratio_err;  // load transfer as dFz/Fz per m/s^2, where named
   int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0,
       none_exact = 0, refused = 0;
   for (std::size_t k = 0; k < results.size(); ++k) {
@@ -180,6 +181,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
         mag_err_named[inj.effect].push_back(err);
     }
     if (r.correct()) after_over_noise.push_back(ratio);
+    if (std::isfinite(r.load_per_decel_estimate) && std::isfinite(inj.load_per_decel))
+      load_ratio_err.push_back(std::abs(r.load_per_decel_estimate / inj.load_per_decel - 1));
     after_by_effect[inj.effect].push_back(ratio);
   }
   std::vector<std::string> said_cols = labels;
@@ -237,6 +240,16 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     std::cout << fmt::format(
         "magnitude error where named, {}: median {:.1f} %, p90 {:.1f} % ({} trials)\n", e,
         100 * quantile(v, 0.5), 100 * quantile(v, 0.9), v.size());
+  }
+  if (!load_ratio_err.empty()) {
+    j["load_ratio_error_named"] = {{"median", quantile(load_ratio_err, 0.5)},
+                                   {"p90", quantile(load_ratio_err, 0.9)},
+                                   {"trials", load_ratio_err.size()}};
+    std::cout << fmt::format(
+        "load transfer as dFz/Fz per m/s^2 where named: median {:.1f} %, p90 {:.1f} % ({} "
+        "trials)\n",
+        100 * quantile(load_ratio_err, 0.5), 100 * quantile(load_ratio_err, 0.9),
+        load_ratio_err.size());
   }
   j["gap_after_over_noise"] = {{"median", quantile(after_over_noise, 0.5)},
                                {"p90", quantile(after_over_noise, 0.9)}};

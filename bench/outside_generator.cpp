@@ -79,6 +79,7 @@ std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& in
     sim::append_event_csv_runs(out, text, name);
   }
   if (inj.effect == "slip_offset") inj.magnitude = -inj.magnitude;
+  if (inj.effect == "load_transfer") inj.load_per_decel = inj.magnitude * kLoadPerDecelPerHoverL;
   if (inj.effect == "load_transfer")
     inj.magnitude *= kLoadPerDecelPerHoverL *
                      d_ln_d_per_ln_fz(truth.at("tyre").get<std::string>(), wheel_load_n);

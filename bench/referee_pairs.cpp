@@ -43,6 +43,7 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
   // Per effect: in how many pairs it was drawn and named; its magnitude error where named.
   std::map<std::string, int> drawn, named;
   std::map<std::string, std::vector<double>> err;
+  std::vector<double> load_ratio_err;  // load transfer as dFz/Fz per m/s^2, where named
   for (std::size_t k = 0; k < results.size(); ++k) {
     const auto& r = results[k];
     const auto& inj = r.truth;
@@ -56,6 +57,8 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
       named[e] += said;
       if (said && std::isfinite(est)) err[e].push_back(std::abs(est - m) / std::abs(m));
     }
+    if (std::isfinite(r.load_per_decel_estimate) && std::isfinite(inj.load_per_decel))
+      load_ratio_err.push_back(std::abs(r.load_per_decel_estimate / inj.load_per_decel - 1));
     if (!r.correct() || st.why > 1)
       std::cerr << fmt::format(
           "[{}] pair {}: {} {:.4g} + {} {:.4g} said {} (estimates {:.4g}, {:.4g})\n", cname,
@@ -79,6 +82,12 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
                             {"magnitude_error_named_p90", quantile(v, 0.9)}};
   }
   j["counts"] = {{"pairs", n}, {"pairs_both", both}, {"pairs_exact", exact}};
+  if (!load_ratio_err.empty()) {
+    j["pair_load_ratio_error_named"] = {{"median", quantile(load_ratio_err, 0.5)},
+                                        {"trials", load_ratio_err.size()}};
+    std::cout << fmt::format("load transfer in a pair as dFz/Fz per m/s^2: median {:.1f} % ({})\n",
+                             100 * quantile(load_ratio_err, 0.5), load_ratio_err.size());
+  }
   j["pair_trials"] = n;
   j["pairs_both_named"] = n ? static_cast<double>(both) / n : NAN;
   j["pairs_exact"] = n ? static_cast<double>(exact) / n : NAN;

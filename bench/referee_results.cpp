@@ -126,6 +126,10 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
       each += fmt::format("{}{} {} ({})", each.empty() ? "" : "; ", e, percent(num(v, "median")),
                           percent(num(v, "p90")));
     const std::string trials = r["trial_generator"], gates = r["gate_generator"];
+    if (r.contains("load_ratio_error_named"))
+      each += fmt::format("; load transfer as dFz/Fz per m/s^2 {} ({})",
+                          percent(num(r["load_ratio_error_named"], "median")),
+                          percent(num(r["load_ratio_error_named"], "p90")));
     out += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(), trials, gates,
                        each);
   }

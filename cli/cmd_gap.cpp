@@ -241,6 +241,7 @@ void add_gap_command(CLI::App& app) {
     RunOptions run;
     double gate_gain = NAN, bic_margin = NAN;  ///< NaN: the calibrated gate of the condition
     double fit_quality_factor = NAN;           ///< NaN: the condition's (1.5)
+    double vehicle_mass_kg = 0.0;              ///< 0: not given
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand(
@@ -269,6 +270,10 @@ void add_gap_command(CLI::App& app) {
   cmd->add_option("--fit-quality-factor", o->fit_quality_factor,
                   "a held-out gap above this x the noise floor is `unexplained` (default 1.5; "
                   "bench/gap_referee calibrates it on null data, as the gates)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--vehicle-mass", o->vehicle_mass_kg,
+                  "the vehicle's mass in kg: load transfer is also given as the centre of "
+                  "gravity's height over the wheelbase (h/L), from the runs' wheel load")
       ->check(CLI::PositiveNumber);
   cmd->callback([o] {
     const Model model = load_model(resolve_model_path(o->model));
@@ -369,6 +374,7 @@ void add_gap_command(CLI::App& app) {
     }
     gap::Options gap_options = gap::calibrated_options(condition);
     if (std::isfinite(o->gate_gain)) gap_options.gate_gain = o->gate_gain;
+    gap_options.vehicle_mass_kg = o->vehicle_mass_kg;
     if (std::isfinite(o->bic_margin)) gap_options.bic_margin = o->bic_margin;
     if (std::isfinite(o->fit_quality_factor)) gap_options.noise_factor = o->fit_quality_factor;
     spdlog::info(

@@ -223,6 +223,23 @@ Scenario inject(Scenario s, const Injection& inj) {
   return s;
 }
 
+double Injection::load_transfer_magnitude() const {
+  if (effect == "load_transfer") return magnitude;
+  if (effect2 == "load_transfer") return magnitude2;
+  return NAN;
+}
+
+namespace {
+
+/// A's runs: the truth of dFz/Fz per m/s^2 from the D scale injected and the tyre's d ln D /
+/// d ln Fz at the scenario's load.
+void set_load_truth(Injection& inj, const Scenario& injected) {
+  const double q = inj.load_transfer_magnitude();
+  if (std::isfinite(q)) inj.load_per_decel = q / d_ln_d_per_ln_fz(injected);
+}
+
+}  // namespace
+
 std::vector<gap::Run> simulate_runs(const Scenario& base, std::uint64_t seed, MfParams* truth) {
   std::vector<gap::Run> out;
   std::uint64_t k = 0;
@@ -315,6 +332,10 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   t.notes = rep.notes;
   t.estimate = NAN;
   t.estimate2 = NAN;
+  for (const auto& e : rep.effects)
+    if (e.accepted && e.effect == gap::Effect::LoadTransfer)
+      for (const auto& [name, value] : e.params)
+        if (name == "load_ratio_per_decel_s2_per_m") t.load_per_decel_estimate = value;
   // The accepted score's when it was named (forward selection appends it after round 1's).
   const auto estimate = [&](const std::string& effect, double& out) {
     bool accepted = false;
@@ -342,6 +363,8 @@ std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, doubl
   sim2::SetDraw set = sim2::draw_set(bench, effects, seed);
   inj.magnitude = set.magnitudes.front();
   if (inj.pair()) inj.magnitude2 = set.magnitudes.back();
+  if (std::isfinite(inj.load_transfer_magnitude()))
+    inj.load_per_decel = set.runs.front().load_per_decel;
   if (sample_hz > 0)
     for (auto& run : set.runs) run.tester.sample_hz = sample_hz;
   std::vector<gap::Run> out;
@@ -390,18 +413,21 @@ gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
     return gap::diagnose(runs, pooled_start(runs), o);
   }
   if (c != gap::Condition::RollerToRoad) {
-    const auto runs =
-        simulate_runs(inject(referee_null(c == gap::Condition::Ground ? can::BenchKind::Ground
-                                                                      : can::BenchKind::Roller),
-                             inj),
-                      seed);
+    const Scenario s = inject(
+        referee_null(c == gap::Condition::Ground ? can::BenchKind::Ground : can::BenchKind::Roller),
+        inj);
+    set_load_truth(inj, s);
+    const auto runs = simulate_runs(s, seed);
     return gap::diagnose(runs, pooled_start(runs), o);
   }
   Scenario roller = referee_null(can::BenchKind::Roller);
   Scenario road = referee_null(can::BenchKind::Ground);
   if (is_transfer_roller_effect(inj) || inj.effect == "misspecified")  // the tyre: both benches
     roller = inject(roller, inj);
-  if (!is_transfer_roller_effect(inj)) road = inject(road, inj);
+  if (!is_transfer_roller_effect(inj)) {
+    road = inject(road, inj);
+    set_load_truth(inj, road);
+  }
   const auto roller_runs = simulate_runs(roller, seed);
   const auto road_runs = simulate_runs(road, seed + 7'777'777);
   return gap::diagnose_transfer(roller_runs, road_runs, pooled_start(roller_runs), o);
@@ -429,8 +455,11 @@ TrialResult run_trial(const Injection& inj_in, std::uint64_t seed, const gap::Op
 
 TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t seed,
                       const gap::Options& o) {
-  const auto runs = simulate_runs(inject(base, inj), seed);
-  TrialResult r = score(inj, gap::diagnose(runs, pooled_start(runs), o));
+  Injection truth = inj;
+  const Scenario s = inject(base, inj);
+  set_load_truth(truth, s);
+  const auto runs = simulate_runs(s, seed);
+  TrialResult r = score(truth, gap::diagnose(runs, pooled_start(runs), o));
   r.one_speed = true;  // A's runs
   return r;
 }

@@ -4,6 +4,7 @@
 // conditions: model vs measurement on the roller (5 km/h) and on flat ground (40 km/h), and roller
 // vs road (the transfer effects). Also the gate calibration on null data (seeds disjoint from the
 // referee's), per condition.
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -37,6 +38,12 @@ struct Injection {
   std::string effect2 = {};
   double magnitude2 = 0.0;
   bool pair() const { return !effect2.empty(); }
+  /// Load transfer's truth as the wheel load's relative change per m/s^2 of deceleration
+  /// (dFz/Fz), set where the runs are made (NaN: no load transfer).
+  double load_per_decel = NAN;
+  /// The load transfer injected (first or second), its magnitude in the diagnosis's unit; NaN:
+  /// none.
+  double load_transfer_magnitude() const;
 };
 
 /// The effects the referee draws in a condition (besides none) and their magnitude ranges.
@@ -75,6 +82,8 @@ struct TrialResult {
   std::vector<std::string> notes;  ///< "cannot separate A from B" notes of the diagnosis
   double estimate = 0.0;   ///< the injected effect's parameter when fitted alone (NaN for none)
   double estimate2 = 0.0;  ///< a pair's second effect's, as estimate
+  /// Load transfer's dFz/Fz per m/s^2 where it was named (NaN: not named).
+  double load_per_decel_estimate = NAN;
   double gap_before_n = 0.0, gap_after_n = 0.0, noise_n = 0.0;
   /// The set's runs share one speed (A's runs; B's and C's roller runs): there a relaxation
   /// (sigma / V) and a time offset are one lag, and either name counts for the other.

@@ -87,6 +87,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   full.bench = c.bench;
   full.wheel_radius_m = c.wheel_radius_m;
   full.brake_gain_n_per_bar = c.brake_gain_n_per_bar;
+  full.wheel_load_n = c.wheel_load_n;
   std::vector<double> v_wheel, pressure;
   auto take = [&](const pipeline::Sample& s) {
     if (s.v_ref_mps < 0.3) return;

@@ -139,7 +139,7 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
                  "other speeds or ramp rates would tell them apart",
                  !cap);
   if (!cap) ripple_against_effects(rep, runs, fit, o);
-  measure_load_transfer(rep, runs, fit);
+  measure_load_transfer(rep, runs, fit, o);
   if (cap) {
     // Found from how the runs end, not fitted: before, the baseline on the whole runs (the
     // runaway at the cap included); after, the baseline on the runs below the cap.

@@ -81,6 +81,7 @@ struct Run {
   can::BenchKind bench = can::BenchKind::Roller;
   double wheel_radius_m = 0.3;
   double brake_gain_n_per_bar = 1.0;
+  double wheel_load_n = 0.0;  ///< the station's static wheel load (0: not known)
   std::vector<double> t_s, slip, v_ref_mps, force_n;
   std::vector<double> wheel_accel_mps2;  ///< d v_wheel / dt (negative when the wheel slows)
   /// The encoders' rolled angles (rad) since the run's start: speed / radius integrated (the
@@ -193,9 +194,12 @@ Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& eff
 double rmse(const Run& r, const std::vector<double>& params, const std::vector<Effect>& effects);
 
 struct Options {
-  double gate_gain = 0.10;      ///< minimum held-out gain (1 - after/before) to accept an effect
-  double bic_margin = 10.0;     ///< minimum BIC decrease
-  double noise_factor = 1.5;    ///< held-out RMSE above noise_factor x noise = a gap is left
+  double gate_gain = 0.10;    ///< minimum held-out gain (1 - after/before) to accept an effect
+  double bic_margin = 10.0;   ///< minimum BIC decrease
+  double noise_factor = 1.5;  ///< held-out RMSE above noise_factor x noise = a gap is left
+  /// The vehicle's mass where it is known (0: not): load transfer is also given as the centre of
+  /// gravity's height over the wheelbase.
+  double vehicle_mass_kg = 0.0;
   std::size_t max_effects = 3;  ///< forward selection depth
   /// When a gap above noise_factor x noise is left, the first accepted effect must have had at
   /// least this held-out gain, else none is named (fit-quality check: a curve that is not a Magic

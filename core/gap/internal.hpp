@@ -24,6 +24,10 @@ inline constexpr double kTyreShiftBicMargin = 10.0;
 /// a van's 1.17). The slip stiffness's load sensitivity over the peak's, at which load
 /// transfer's magnitude is measured (Effect::LoadTransferMeasured).
 inline constexpr double kPublishedKxLoadRatio = 1.25;
+/// How the peak follows the load, d ln D / d ln Fz, of published MF 6.1 tyres: 0.87-0.97 for the
+/// four .tir files of sim/second at 0.8-1.15 x their nominal loads. Load transfer's D scale per
+/// m/s^2 over it is the load's relative change per m/s^2, dFz/Fz.
+inline constexpr double kPublishedPeakLoadExponent = 0.93;
 /// The nuisance terms (a slip bias common to the runs), not effects: never named.
 inline bool is_nuisance(Effect e) {
   return e == Effect::ReferenceBias || e == Effect::TyreShift;
@@ -174,7 +178,10 @@ std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector
 MfParams neutral_start(const std::vector<Run>& runs);
 /// Load transfer, once named (in rep.accepted), is measured with the stiffness ratio held at the
 /// published tyres' (Effect::LoadTransferMeasured): its score's magnitude becomes that fit's.
-void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit);
+/// Also given in the law's units: dFz/Fz per m/s^2 (through kPublishedPeakLoadExponent) and, with
+/// the vehicle's mass and the runs' wheel load, h/L = 2 Fz (dFz/Fz per m/s^2) / m.
+void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
+                           const Options& o);
 /// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,
 /// gap_before_rmse_n, noise_n); fills effects, accepted, after, gap_after_rmse_n, verdict, notes.
 /// ripple_per_candidate: the largest gains are scored again with the encoders' ripple estimated

@@ -147,6 +147,12 @@ class Gap(unittest.TestCase):
             self.assertEqual(r.returncode, 65, r.stderr)
             self.assertIn("1 run usable in 2 files", r.stderr)
 
+    def test_a_vehicle_mass_must_be_positive(self):
+        runs = [os.path.join(REC, f"roller_2p2bar_{r}.log") for r in ("slow", "fast")]
+        r = run("gap", "--vehicle-mass", "-1300", *runs)
+        self.assertEqual(r.returncode, 64)
+        self.assertIn("--vehicle-mass", r.stderr)
+
     def test_runs_of_two_benches_are_refused_in_mode_1(self):
         r = run("gap", os.path.join(REC, "roller_2p2bar_fast.log"),
                 os.path.join(REC, "ground_2p2bar_150barps.log"))

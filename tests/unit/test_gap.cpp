@@ -234,10 +234,40 @@ TEST(GapReferee, LoadTransfersMagnitudeIsMeasuredAtThePublishedStiffnessRatio) {
     ASSERT_FALSE(t.verdict.empty());
     EXPECT_EQ(t.verdict.front(), "load_transfer") << "seed " << seed;
     EXPECT_NEAR(t.estimate, magnitude, 0.15 * magnitude) << "seed " << seed;
+    // In the law's unit, the wheel load's change per m/s^2 (dFz/Fz), through published tyres'
+    // d ln D / d ln Fz: the truth is the simulated tyre's.
+    ASSERT_TRUE(std::isfinite(t.truth.load_per_decel));
+    EXPECT_NEAR(t.load_per_decel_estimate, t.truth.load_per_decel, 0.15 * t.truth.load_per_decel)
+        << "seed " << seed;
     bool noted = false;
     for (const auto& n : t.notes) noted |= n.find("load ratio held at") != std::string::npos;
     EXPECT_TRUE(noted) << "seed " << seed;
   }
+}
+
+TEST(GapReferee, LoadTransferIsGivenAsHOverLWhereTheMassIsKnown) {
+  // The vehicle's mass given: h/L = 2 Fz (dFz/Fz per m/s^2) / m, against the simulated vehicle's
+  // centre of gravity and wheelbase (trial 43's set, as above).
+  const sim::Injection inj{"load_transfer", 0.02269, gap::Condition::Ground};
+  const sim::Scenario s = sim::inject(sim::referee_null(can::BenchKind::Ground), inj);
+  const auto runs = sim::simulate_runs(s, 101043);
+  gap::Options o = gap::calibrated_options(gap::Condition::Ground);
+  o.vehicle_mass_kg = s.vehicle_mass_kg;
+  const gap::Report rep = gap::diagnose(runs, sim::pooled_start(runs), o);
+  ASSERT_FALSE(rep.verdict.empty());
+  ASSERT_EQ(rep.verdict.front(), "load_transfer");
+  double h_over_l = NAN;
+  for (const auto& e : rep.effects)
+    if (e.accepted && e.effect == gap::Effect::LoadTransfer)
+      for (const auto& [name, v] : e.params)
+        if (name == "cg_height_over_wheelbase") h_over_l = v;
+  const double truth = s.cg_height_m / s.wheelbase_m;
+  EXPECT_NEAR(h_over_l, truth, 0.15 * truth);
+  // Without the mass only dFz/Fz is given.
+  const gap::Report no_mass =
+      gap::diagnose(runs, sim::pooled_start(runs), gap::calibrated_options(gap::Condition::Ground));
+  for (const auto& e : no_mass.effects)
+    for (const auto& [name, v] : e.params) EXPECT_NE(name, "cg_height_over_wheelbase");
 }
 
 TEST(GapReferee, RollerVsRoadNamesTheTransferEffect) {
