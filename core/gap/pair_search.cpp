@@ -96,6 +96,19 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
     }
   if (!best) return std::nullopt;
   PairFound& p = *best;
+  // The member that contributes more is named first (the verdict's order is the model's).
+  if (p.gain_over_b > p.gain_over_a) {
+    // a's and b's blocks are the fit's last two, side by side: b's goes first.
+    const auto at_a = static_cast<std::ptrdiff_t>(*param_offset(p.model, p.a.effect));
+    const auto at_b = static_cast<std::ptrdiff_t>(*param_offset(p.model, p.b.effect));
+    const auto end = at_b + static_cast<std::ptrdiff_t>(effect_params(p.b.effect).size());
+    for (auto* v : {&p.fit.params, &p.fit.stderr_})
+      if (static_cast<std::ptrdiff_t>(v->size()) >= end)
+        std::rotate(v->begin() + at_a, v->begin() + at_b, v->begin() + end);
+    std::swap(p.model[p.model.size() - 1], p.model[p.model.size() - 2]);
+    std::swap(p.a, p.b);
+    std::swap(p.gain_over_a, p.gain_over_b);
+  }
   // Named only when the pair explains the gap as a first effect must (the fit-quality share),
   // does better than forward selection by the gain gate, passes the BIC margin for its two
   // effects, and neither member could be dropped.
