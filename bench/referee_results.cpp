@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -63,11 +64,16 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
   std::string out;
   if (!doc.contains("conditions")) return out;
   const auto& rows = doc["conditions"];
-  out +=
-      "| condition | trials | gates | effects correct | exactly first | false positives | null "
-      "`[\"none\"]` | misspecified none/unexplained | refused | gap after / floor, median (p90) "
-      "|\n|---|---|---|---|---|---|---|---|---|---|\n";
+  const auto has_trials = [](const nlohmann::ordered_json& r) {
+    return r["counts"].value("effects", 0) + r["counts"].value("null", 0) > 0;
+  };
+  if (std::any_of(rows.begin(), rows.end(), has_trials))
+    out +=
+        "| condition | trials | gates | effects correct | exactly first | false positives | null "
+        "`[\"none\"]` | misspecified none/unexplained | refused | gap after / floor, median (p90) "
+        "|\n|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : rows) {
+    if (!has_trials(r)) continue;
     const auto& c = r["counts"];
     out += row_name(r) +
            fmt::format("| {} | {:.1f} % | {} | {} | {} | {} | {:.2f} ({:.2f}) |\n",
@@ -118,7 +124,9 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
       }
     }
   }
-  out += "\nMagnitude error where named, single effects, median (p90):\n\n";
+  if (std::any_of(rows.begin(), rows.end(),
+                  [](const auto& r) { return r.contains("magnitude_error_named"); }))
+    out += "\nMagnitude error where named, single effects, median (p90):\n\n";
   for (const auto& r : rows) {
     if (!r.contains("magnitude_error_named")) continue;
     std::string each;
