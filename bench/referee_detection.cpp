@@ -15,7 +15,6 @@ nlohmann::ordered_json run_detection(gap::Condition c, sim::Generator g, const g
   struct Cell {
     std::string effect;
     double magnitude;
-    int set;
   };
   std::vector<Cell> cells;
   std::vector<std::string> effects;
@@ -26,7 +25,7 @@ nlohmann::ordered_json run_detection(gap::Condition c, sim::Generator g, const g
     const double from = lo / 4;
     for (int k = 0; k < st.levels; ++k) {
       const double m = from * std::pow(hi / from, k / std::max(1.0, st.levels - 1.0));
-      for (int s = 0; s < st.sets; ++s) cells.push_back({e, m, s});
+      for (int s = 0; s < st.sets; ++s) cells.push_back({e, m});
     }
   }
   const auto results = parallel_map<sim::TrialResult>(

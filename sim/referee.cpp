@@ -164,6 +164,15 @@ std::pair<double, double> effect_range(gap::Condition c, Generator g, const std:
                                gap::to_string(c), to_string(g)));
 }
 
+namespace {
+
+/// A relaxation (sigma / V) or a time offset: at one speed, one lag.
+bool is_lag(const std::string& e) {
+  return e == "relaxation_length" || e == "time_offset";
+}
+
+}  // namespace
+
 Injection draw_pair(Rng& rng, gap::Condition c, Generator g) {
   Injection inj;
   inj.condition = c;
@@ -174,13 +183,9 @@ Injection draw_pair(Rng& rng, gap::Condition c, Generator g) {
     const double m = rng.uniform(r.lo, r.hi);
     return r.either_sign && rng.uniform() < 0.5 ? -m : m;
   };
-  const auto lag_and_delay = [](const std::string& a, const std::string& b) {
-    return (a == "relaxation_length" && b == "time_offset") ||
-           (a == "time_offset" && b == "relaxation_length");
-  };
   const auto& r1 = rs[rng.index(rs.size())];
   const Range* r2 = &r1;
-  while (r2->effect == r1.effect || lag_and_delay(r1.effect, r2->effect))
+  while (r2->effect == r1.effect || (is_lag(r1.effect) && is_lag(r2->effect)))
     r2 = &rs[rng.index(rs.size())];
   inj.effect = r1.effect;
   inj.magnitude = magnitude(r1);
@@ -293,14 +298,6 @@ bool inseparable(const std::vector<std::string>& notes, const std::string& said,
         n.find(effect) != std::string::npos)
       return true;
   return false;
-}
-
-}  // namespace
-
-namespace {
-
-bool is_lag(const std::string& e) {
-  return e == "relaxation_length" || e == "time_offset";
 }
 
 }  // namespace

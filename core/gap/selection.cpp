@@ -387,7 +387,6 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   };
   // Two effects that neither explains alone (their bends partly cancel): the leading candidates
   // in pairs, when a structured gap is left and fewer than two were named.
-  bool pair_named = false;
   if (named(chosen).size() < 2 && current_heldout > o.noise_factor * rep.noise_n) {
     std::vector<Run>& entry = entry_runs ? *entry_runs : runs;  // the runs round 1 scored
     if (auto p = search_pairs(entry, base, rep.effects, rep.gap_before_rmse_n, current_heldout,
@@ -423,7 +422,6 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       chosen = p->model;
       current_fit = std::move(p->fit);
       current_heldout = p->heldout_n;
-      pair_named = true;
     }
   }
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
@@ -433,7 +431,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
     if (named(chosen).size() > 0 && e.effect == named(chosen).front()) first = e.gain;
   // Two or more named: the share they explain together (a pair's members may each bend the
   // curve against the other alone).
-  if (pair_named || named(chosen).size() > 1)
+  if (named(chosen).size() > 1)
     first = std::max(first, 1.0 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12));
   if (!named(chosen).empty() && current_heldout > o.noise_factor * rep.noise_n &&
       first < o.min_first_gain)
