@@ -139,6 +139,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   std::map<std::string, std::vector<double>> mag_err, mag_err_named, after_by_effect;
   std::vector<double> after_over_noise;
   std::vector<double> load_ratio_err;  // load transfer as dFz/Fz per m/s^2, where named
+  std::map<std::string, std::pair<int, int>> by_vehicle;  // right (named or none), all
   int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0,
       none_exact = 0, refused = 0;
   for (std::size_t k = 0; k < results.size(); ++k) {
@@ -152,8 +153,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     // too, with their estimate and the gap left.
     if (!r.exact() || st.why > 1)
       std::cerr << fmt::format(
-          "[{}] trial {}: {} {:.4g} said {}{}\n", cname, kept[k], inj.effect, inj.magnitude,
-          fmt::join(r.verdict, ", "),
+          "[{}] trial {}: {} {:.4g} said {}{}{}\n", cname, kept[k], inj.effect, inj.magnitude,
+          fmt::join(r.verdict, ", "), inj.station.empty() ? "" : " [" + inj.station + "]",
           r.exact() ? fmt::format(" (estimate {:.4g}, gap after / floor {:.2f}, before {:.2f})",
                                   r.estimate, ratio, before_ratio)
                     : fmt::format(" (gap before / floor {:.2f})", before_ratio));
@@ -163,6 +164,11 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
       ++refused;
       std::cerr << fmt::format("[{}] refused ({} {}): {}\n", cname, inj.effect, inj.magnitude,
                                r.notes.empty() ? "" : r.notes.front());
+    }
+    if (!inj.station.empty()) {  // by vehicle: the first word of the station drawn
+      auto& [right, all] = by_vehicle[inj.station.substr(0, inj.station.find(' '))];
+      right += r.exact() || (inj.effect != "none" && r.correct());
+      ++all;
     }
     if (inj.effect == "none") {
       ++n_none;
@@ -199,8 +205,13 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
         other.push_back(fmt::format("{} {}", k, v));
     std::cout << (other.empty() ? "" : fmt::format(" (+{})", fmt::join(other, ", "))) << " |\n";
   }
+  for (const auto& [vehicle, counts] : by_vehicle)
+    std::cout << fmt::format("{} sets: {} of {} right (the effect named, or none for none)\n",
+                             vehicle, counts.first, counts.second);
   nlohmann::ordered_json j;
   j["condition"] = gap::to_string(c);
+  for (const auto& [vehicle, counts] : by_vehicle)
+    j["by_vehicle"][vehicle] = {{"right", counts.first}, {"sets", counts.second}};
   j["trial_generator"] = sim::to_string(trial_gen);
   j["gate_generator"] = sim::to_string(gate_gen);
   j["crossed"] = trial_gen != gate_gen;
@@ -310,6 +321,7 @@ int run(int argc, char** argv) {
   std::string gen_c = std::string(BRAKEFIT_SOURCE_DIR) + "/../shared/gapgen/gen_c.py";
   std::string trials_from;           // --trials-from: only these generators' trials (empty: all)
   std::string results, results_key;  // --results FILE [--results-key KEY]
+  std::string stations = "cars";     // --stations: generator B's draws
   bool crossed = true;
   g_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int i = 1; i < argc; i += 2) {
@@ -321,6 +333,8 @@ int run(int argc, char** argv) {
              "  [--pairs N]           (pair trials per row: two effects at once, A and B)\n"
              "  [--seed S] [--threads N] [--generators A,B,C] [--gen-c SCRIPT] [--crossed 1|0]\n"
              "  [--trials-from C]      (only these generators' trials; gates from all)\n"
+             "  [--stations cars|every] (generator B's sets: cars at 5 km/h and 30-70 km/h, or\n"
+             "                         every export: 50-1000 Hz, 2-6 runs, heavy vehicles)\n"
              "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
              "  [--detection SETS [--detection-levels L]]  (detection curves: SETS sets at\n"
              "                         each of L magnitudes per effect, straight rows)\n"
@@ -364,6 +378,8 @@ int run(int argc, char** argv) {
       results_key = v;
     else if (k == "--trials-from")
       trials_from = v;
+    else if (k == "--stations")
+      stations = v;
     else if (k == "--only") {
       std::stringstream list(v);
       for (std::string e; std::getline(list, e, ',');) st.only.push_back(e);
@@ -376,6 +392,11 @@ int run(int argc, char** argv) {
       return 64;
     }
   }
+  if (stations != "cars" && stations != "every") {
+    std::cerr << "gap_referee: --stations is cars or every\n";
+    return 64;
+  }
+  sim::set_generator_b_stations(stations == "every" ? sim2::Stations::Every : sim2::Stations::Cars);
   if (!results.empty() && !std::ofstream(results, std::ios::app)) {  // before hours of trials
     std::cerr << "gap_referee: cannot write the results file " << results << "\n";
     return 73;
@@ -393,6 +414,7 @@ int run(int argc, char** argv) {
   j["schema"] = "brakefit.gap_referee/1";
   j["version"] = kVersion;
   j["seed"] = st.seed;
+  j["stations"] = stations;
   bool any = false;
   for (auto c : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad}) {
     if (which != "all" && which != gap::to_string(c)) continue;

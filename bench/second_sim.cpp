@@ -4,10 +4,12 @@
 //              [--effect2 E --magnitude2 X]   (a second effect in the same set: a pair)
 //              [--seed N] [--ripple R] [--speed-step MPS] [--pressure-filter S]
 //              [--pressure-step BAR] [--pressure-noise BAR] [--jitter RATIO] [--ripple-ref R]
-//              [--pitch-lag S] [--truth-curve FILE] --out DIR
-// The optional overrides replace the drawn tester export (R: both encoders' relative ripple).
-// Prints the drawn tyre, the truth magnitude and the files written. --truth-curve writes the
-// tyre's steady-state curve at the set's load and pressure (slip,force_n, slip 0 to 1): what a
+//              [--pitch-lag S] [--truth-curve FILE] [--stations cars|every] --out DIR
+// --stations every draws from every export stations make (50-1000 Hz, 2-6 runs, 2-6 km/h rollers
+// that droop, heavy vehicles, ground runs at 30-130 km/h); cars (the default) as the referee's
+// first draws. The optional overrides replace the drawn tester export (R: both encoders' relative
+// ripple). Prints the drawn tyre, the truth magnitude and the files written. --truth-curve writes
+// the tyre's steady-state curve at the set's load and pressure (slip,force_n, slip 0 to 1): what a
 // fit on the tyre's basis should find, with the instrument's effects undone.
 #include <fmt/format.h>
 
@@ -23,7 +25,7 @@
 using namespace brakefit;
 
 int main(int argc, char** argv) {
-  std::string bench = "roller", effect = "none", effect2, out, truth_curve;
+  std::string bench = "roller", effect = "none", effect2, out, truth_curve, stations = "cars";
   double magnitude = 0, magnitude2 = 0;
   std::uint64_t seed = 1;
   double ripple = -1, speed_step = -1, pressure_filter = -1, pressure_step = -1, jitter = -1,
@@ -60,6 +62,8 @@ int main(int argc, char** argv) {
       out = v;
     else if (k == "--pitch-lag")
       pitch_lag = std::atof(v.c_str());
+    else if (k == "--stations")
+      stations = v;
     else if (k == "--truth-curve")
       truth_curve = v;
     else {
@@ -67,15 +71,18 @@ int main(int argc, char** argv) {
       return 64;
     }
   }
-  if (out.empty() || (bench != "roller" && bench != "ground")) {
-    std::cerr << "second_sim: --bench roller|ground and --out DIR are required\n";
+  if (out.empty() || (bench != "roller" && bench != "ground") ||
+      (stations != "cars" && stations != "every")) {
+    std::cerr << "second_sim: --bench roller|ground and --out DIR are required; --stations is "
+                 "cars or every\n";
     return 64;
   }
   try {
     std::vector<sim2::EffectDraw> effects{{effect, magnitude}};
     if (!effect2.empty()) effects.push_back({effect2, magnitude2});
-    auto set = sim2::draw_set(bench == "roller" ? can::BenchKind::Roller : can::BenchKind::Ground,
-                              effects, seed);
+    auto set =
+        sim2::draw_set(bench == "roller" ? can::BenchKind::Roller : can::BenchKind::Ground, effects,
+                       seed, stations == "every" ? sim2::Stations::Every : sim2::Stations::Cars);
     for (auto& r : set.runs) {
       if (ripple >= 0) r.tester.eccentricity_ref = r.tester.eccentricity_wheel = ripple;
       if (speed_step >= 0) r.tester.speed_step_mps = speed_step;
@@ -93,6 +100,7 @@ int main(int argc, char** argv) {
     if (!effect2.empty())
       std::cout << fmt::format("second effect {} magnitude {:.4g}\n", effect2,
                                set.magnitudes.back());
+    std::cout << "station: " << set.station << "\n";
     const auto& tx = set.runs.front().tester;
     std::cout << fmt::format(
         "export: speed step {:.2g} m/s, ripple wheel {:.2g} reference {:.2g}, pressure filter "

@@ -352,12 +352,21 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
 
 }  // namespace
 
+namespace {
+sim2::Stations g_stations = sim2::Stations::Cars;  // set once by the referee before its threads
+}  // namespace
+
+void set_generator_b_stations(sim2::Stations s) {
+  g_stations = s;
+}
+
 std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, double sample_hz) {
   const auto bench =
       inj.condition == gap::Condition::Ground ? can::BenchKind::Ground : can::BenchKind::Roller;
   std::vector<sim2::EffectDraw> effects{{inj.effect, inj.magnitude}};
   if (inj.pair()) effects.push_back({inj.effect2, inj.magnitude2});
-  sim2::SetDraw set = sim2::draw_set(bench, effects, seed);
+  sim2::SetDraw set = sim2::draw_set(bench, effects, seed, g_stations);
+  inj.station = set.station;
   inj.magnitude = set.magnitudes.front();
   if (inj.pair()) inj.magnitude2 = set.magnitudes.back();
   if (std::isfinite(inj.load_transfer_magnitude()))

@@ -14,6 +14,7 @@
 #include "core/gap/gap.hpp"
 #include "core/rng.hpp"
 #include "sim/scenario.hpp"
+#include "sim/second/generator.hpp"
 
 namespace brakefit::sim {
 
@@ -41,6 +42,8 @@ struct Injection {
   /// Load transfer's truth as the wheel load's relative change per m/s^2 of deceleration
   /// (dFz/Fz), set where the runs are made (NaN: no load transfer).
   double load_per_decel = NAN;
+  /// What generator B drew for the set (vehicle, runs, export rate, speeds); empty for A and C.
+  std::string station = {};
   /// The load transfer injected (first or second), its magnitude in the diagnosis's unit; NaN:
   /// none.
   double load_transfer_magnitude() const;
@@ -63,8 +66,12 @@ Injection draw_pair(Rng& rng, gap::Condition c, Generator g = Generator::A);
 /// conditioned (an event too short to condition is skipped) and appended to out.
 void append_event_csv_runs(std::vector<gap::Run>& out, const std::string& text,
                            const std::string& name);
-/// sample_hz: the tester's export rate (0: the drawn set's own, 1 kHz).
+/// sample_hz: the tester's export rate (0: the drawn set's own, 1 kHz). The stations drawn from
+/// are those set by set_generator_b_stations (Cars unless set).
 std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, double sample_hz = 0);
+/// Which stations generator B draws its sets from, for every trial and calibration after the
+/// call (set once, before the referee's threads start).
+void set_generator_b_stations(sim2::Stations s);
 /// The scenario with the injection switched on (everything else as in base). In the transfer
 /// condition roller_friction goes to the roller scenario, the others to the road.
 Scenario inject(Scenario base, const Injection& inj);

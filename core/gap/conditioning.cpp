@@ -171,11 +171,19 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       // A roller is held at speed: its flips between two levels are the encoder's ripple or
       // noise at a level boundary, not speed. It is read as its mean (closer to the truth than
       // either level, and free of the flips' steps).
+      // A roller whose drive droops a step under the brake's load is rebuilt with the droop.
       if (c.bench == can::BenchKind::Roller) {
-        double mean = 0;
-        for (double v : full.v_ref_mps) mean += v;
-        mean /= static_cast<double>(full.v_ref_mps.size());
-        std::fill(full.v_ref_mps.begin(), full.v_ref_mps.end(), mean);
+        if (auto droop =
+                drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n, c.roller_radius_m, q);
+            !droop.empty()) {
+          full.v_ref_mps = std::move(droop);
+          ref_smooth = true;
+        } else {
+          double mean = 0;
+          for (double v : full.v_ref_mps) mean += v;
+          mean /= static_cast<double>(full.v_ref_mps.size());
+          std::fill(full.v_ref_mps.begin(), full.v_ref_mps.end(), mean);
+        }
       }
     } else if (c.bench == can::BenchKind::Roller && ref_noise.step > 0 &&
                hi - lo < kHeldRollerSteps * q) {
@@ -184,14 +192,27 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       // fall) and what is left of it in the slip looks like a lag. The ripple is the encoder's,
       // not the roller's (the roller is held by its motor): the speed is the smooth trend under
       // it, fitted to the staircase.
-      if (auto trend = held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
-          !trend.empty()) {
+      // A roller whose drive droops under the brake's load is rebuilt with the droop.
+      auto trend =
+          drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n, c.roller_radius_m, q);
+      if (trend.empty()) trend = held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
+      if (!trend.empty()) {
         full.v_ref_mps = std::move(trend);
         full.ref_bias_bound = half_step_ratio;
         ref_smooth = true;
       }
     }
   }
+  // A roller whose drive droops by many steps: the droop fitted to the transitions, where it is
+  // the roller's (the channel's own rebuilding is piecewise linear between transitions, half a
+  // step off between them: 2e-4 of slip at 1.6 m/s).
+  if (c.bench == can::BenchKind::Roller && !ref_smooth && ref_noise.step > 0)
+    if (auto droop = drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n,
+                                           c.roller_radius_m, ref_noise.step);
+        !droop.empty()) {
+      full.v_ref_mps = std::move(droop);
+      ref_smooth = true;
+    }
   // A roller's wheel held on one level before it slows (rolling free while the pressure rises
   // through a dead zone): where its level is, and when it first left it (hold_rest_at_foot).
   if (c.bench == can::BenchKind::Roller && wheel_noise.step > 0)

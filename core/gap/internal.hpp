@@ -74,6 +74,14 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
 /// first harmonics to the staircase). Empty when the run is too short to tell them apart.
 std::vector<double> held_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
                                       double roller_radius_m);
+/// A roller whose drive droops under the brake's force, read through a quantised channel
+/// (roller_droop.cpp): its speed as a level, a droop following the force behind a lag (0-0.4 s), a
+/// slow trend and the ripple, fitted to the staircase's transitions. Empty where the droop is
+/// under a step over the run (a held roller) or the run has fewer than three transitions.
+std::vector<double> drooping_roller_speed(const std::vector<double>& t_s,
+                                          const std::vector<double>& v,
+                                          const std::vector<double>& force_n,
+                                          double roller_radius_m, double step_mps);
 /// A fifth wheel's ripple is read from its own speed on runs spanning this many revolutions.
 /// Over fewer the trend's misfit (a spline knotted every 0.75 revolutions) projects onto the
 /// ripple's columns as much as onto its neighbours': 10 of generator B's 140 ground runs of

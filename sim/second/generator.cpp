@@ -1,5 +1,7 @@
 #include "sim/second/generator.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -143,6 +145,11 @@ std::string simulate_event_csv(const RunCase& c) {
       y = rk4(dyn, t, y, h);
       if (y[0] < 0) y[0] = 0;
       const double v_ref = dyn.ref_speed(y);
+      if (c.bench == can::BenchKind::Roller && c.roller_droop_ratio > 0) {
+        const double f = dyn.tyre_force_n(dyn.contact_slip(y), v_ref);
+        const double v_target = v0 * (1.0 - c.roller_droop_ratio * f / c.roller_droop_ref_n);
+        dyn.v_roller_mps += (v_target - dyn.v_roller_mps) * h / (c.roller_droop_tau_s + h);
+      }
       if (c.bench == can::BenchKind::Ground) {
         // The load follows the body's pitch: the deceleration through a first-order lag.
         const double decel = std::max(0.0, (before[1] - y[1]) / h);
@@ -205,22 +212,33 @@ std::string simulate_event_csv(const RunCase& c) {
   return pipeline::format_event_csv(ev, cal);
 }
 
+namespace {
+
+std::vector<Mf61Longitudinal> read_tyres(const std::filesystem::path& dir) {
+  std::vector<Mf61Longitudinal> out;
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ".tir") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  for (const auto& p : files) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    out.push_back(mf61_from_tir(parse_tir(ss.str(), p.string()), p.stem().string()));
+  }
+  if (out.empty()) throw InputError("no .tir files in " + dir.string());
+  return out;
+}
+
+}  // namespace
+
 const std::vector<Mf61Longitudinal>& tyre_library() {
-  static const std::vector<Mf61Longitudinal> lib = [] {
-    std::vector<Mf61Longitudinal> out;
-    std::vector<std::filesystem::path> files;
-    for (const auto& e : std::filesystem::directory_iterator(BRAKEFIT_SIM2_TYRE_DIR))
-      if (e.path().extension() == ".tir") files.push_back(e.path());
-    std::sort(files.begin(), files.end());
-    for (const auto& p : files) {
-      std::ifstream in(p);
-      std::stringstream ss;
-      ss << in.rdbuf();
-      out.push_back(mf61_from_tir(parse_tir(ss.str(), p.string()), p.stem().string()));
-    }
-    if (out.empty()) throw InputError(std::string("no .tir files in ") + BRAKEFIT_SIM2_TYRE_DIR);
-    return out;
-  }();
+  static const auto lib = read_tyres(BRAKEFIT_SIM2_TYRE_DIR);
+  return lib;
+}
+
+const std::vector<Mf61Longitudinal>& heavy_tyre_library() {
+  static const auto lib = read_tyres(std::filesystem::path(BRAKEFIT_SIM2_TYRE_DIR) / "heavy");
   return lib;
 }
 
@@ -241,8 +259,13 @@ double d_ln_d_per_ln_fz(const Mf61Longitudinal& t, double fz_n, double pressure_
 
 }  // namespace
 
-SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, std::uint64_t seed) {
+SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, std::uint64_t seed,
+                 Stations stations) {
   Rng rng(seed * 7919 + 17);
+  // The wider station draws take their own stream: a Cars set of a seed stays what it was.
+  Rng srng(seed * 104729 + 5);
+  const bool every = stations == Stations::Every;
+  const bool heavy = every && srng.uniform() < 0.25;
   const auto& lib = tyre_library();
   RunCase base;
   base.bench = bench;
@@ -254,15 +277,28 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
   // wheel's deceleration is ten times the roller's).
   base.inertia_kgm2 =
       bench == can::BenchKind::Roller ? rng.uniform(0.02, 0.05) : rng.uniform(0.005, 0.015);
+  // A heavy vehicle is scaled against a car: air brakes to 8 bar (160 bar hydraulics), a wheel's
+  // inertia by R^2 Fz; the null's light wheel and the effects drawn alike.
+  double pressure_scale = 1, inertia_scale = 1;
+  if (heavy) {
+    const auto& hl = heavy_tyre_library();
+    base.tyre = hl[srng.index(hl.size())];
+    base.fz_n = std::min(40000.0, base.tyre.fnomin_n * srng.uniform(0.6, 1.15));
+    base.pressure_pa = base.tyre.nompres_pa * srng.uniform(0.85, 1.05);
+    base.radius_m = srng.uniform(0.48, 0.54);
+    pressure_scale = 8.0 / 160.0;
+    inertia_scale = base.radius_m * base.radius_m * base.fz_n / (0.31 * 0.31 * 4000.0);
+    base.inertia_kgm2 *= inertia_scale;
+  }
   Contact k;
   k.fz_n = base.fz_n;
   k.pressure_pa = base.pressure_pa;
   double peak_n = 0;
   for (double s = 0.01; s < 0.5; s += 0.005)
     peak_n = std::max(peak_n, mf61_braking_force_n(base.tyre, s, k));
-  // Brake sized so that the peak needs 45-75 bar.
-  base.brake_gain_nm_per_bar = peak_n * base.radius_m / rng.uniform(45, 75);
-  base.max_pressure_bar = 160;
+  // Brake sized so that the peak needs 45-75 bar (2.25-3.75 bar of air).
+  base.brake_gain_nm_per_bar = peak_n * base.radius_m / (rng.uniform(45, 75) * pressure_scale);
+  base.max_pressure_bar = 160 * pressure_scale;
   TesterExport& tx = base.tester;
   tx.sample_hz = rng.uniform() < 0.3 ? 500 : 1000;
   tx.jitter_ratio = rng.uniform(0.05, 0.25);
@@ -275,6 +311,15 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
   tx.eccentricity_wheel = rng.uniform(0, 5e-4);
   tx.switch_off_slip = rng.uniform(0.255, 0.285);
   tx.lock_slip = rng.uniform(0.9, 0.94);
+  if (every) {
+    tx.sample_hz = std::array{50.0, 100.0, 200.0, 250.0, 500.0, 1000.0}[srng.index(6)];
+    tx.stamp_resolution_s = tx.sample_hz >= 1000 ? 1e-3 : 1e-4;
+  }
+  if (heavy) {  // a heavy-vehicle lane's transducers: 1 mm/s, 0.01 bar on an 8 bar range
+    tx.speed_step_mps = 0.001;
+    tx.pressure_step_bar = 0.01;
+    tx.pressure_noise_bar = srng.uniform(0.002, 0.01);
+  }
   // The vehicle (ground): front share of the mass 0.5-0.6 on this axle; h/L 0.15-0.35.
   const double front_share = rng.uniform(0.5, 0.6);
   base.mass_kg = 2 * base.fz_n / (front_share * kG);
@@ -285,8 +330,8 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
   for (const auto& [effect, magnitude] : effects) {
     double truth = magnitude;
     if (effect == "relaxation_length") base.relaxation_m = magnitude;
-    if (effect == "wheel_inertia") base.inertia_kgm2 = magnitude;
-    if (effect == "brake_threshold") base.threshold_bar = magnitude;
+    if (effect == "wheel_inertia") base.inertia_kgm2 = truth = magnitude * inertia_scale;
+    if (effect == "brake_threshold") base.threshold_bar = truth = magnitude * pressure_scale;
     if (effect == "time_offset") base.time_offset_s = magnitude;
     if (effect == "slip_offset") base.radius_error_ratio = -magnitude;
     if (effect == "speed_friction") base.lmuv = magnitude;
@@ -305,26 +350,46 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
     out.magnitudes.push_back(truth);
   }
   out.magnitude = out.magnitudes.empty() ? 0.0 : out.magnitudes.front();
-  // Three runs: roller at 5 km/h with three pedal ramps; ground at 30, 50, 70 km/h.
-  for (int i = 0; i < 3; ++i) {
+  // Cars: three runs, roller at 5 km/h with three pedal ramps, ground at 30, 50, 70 km/h. Every:
+  // 2-6 runs, one roller speed a station (its drive drooping under the brake's load) with pedal
+  // ramps spread log-uniformly over 6-75 bar/s, ground speeds spread over 30-130 km/h.
+  const int n_runs = every ? 2 + static_cast<int>(srng.index(5)) : 3;
+  const double roller_kmh = heavy ? srng.uniform(2, 3) : srng.uniform(2, 6);
+  const double droop = heavy ? srng.uniform(0.02, 0.05) : srng.uniform(0, 0.02);
+  const double droop_tau_s = srng.uniform(0.1, 0.4);
+  const double ground_max_kmh = heavy ? 90 : 130;
+  for (int i = 0; i < n_runs; ++i) {
     RunCase r = base;
     r.seed = seed * 31 + static_cast<std::uint64_t>(i);
-    if (bench == can::BenchKind::Roller) {
+    const double spread = (i + srng.uniform()) / n_runs;  // stratified over the runs
+    if (!every && bench == can::BenchKind::Roller) {
       r.speed_kmh = rng.uniform(4.5, 5.5);
       r.ramp_bar_per_s =
           std::array{10.0, 25.0, 60.0}[static_cast<std::size_t>(i)] * rng.uniform(0.8, 1.2);
-    } else {
+    } else if (!every) {
       r.speed_kmh = std::array{30.0, 50.0, 70.0}[static_cast<std::size_t>(i)];
       r.ramp_bar_per_s = rng.uniform(100, 250);
+    } else if (bench == can::BenchKind::Roller) {
+      r.speed_kmh = roller_kmh;
+      r.ramp_bar_per_s = std::exp(std::log(6.0) + spread * std::log(75.0 / 6.0)) * pressure_scale;
+      r.roller_droop_ratio = droop;
+      r.roller_droop_ref_n = peak_n;
+      r.roller_droop_tau_s = droop_tau_s;
+    } else {
+      r.speed_kmh = 30 + spread * (ground_max_kmh - 30);
+      r.ramp_bar_per_s = srng.uniform(100, 250) * pressure_scale;
     }
     out.runs.push_back(r);
   }
+  out.station =
+      fmt::format("{} {} runs {:g} Hz {:.1f}-{:.1f} km/h", heavy ? "heavy" : "car", n_runs,
+                  tx.sample_hz, out.runs.front().speed_kmh, out.runs.back().speed_kmh);
   return out;
 }
 
 SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitude,
-                 std::uint64_t seed) {
-  return draw_set(bench, std::vector<EffectDraw>{{effect, magnitude}}, seed);
+                 std::uint64_t seed, Stations stations) {
+  return draw_set(bench, std::vector<EffectDraw>{{effect, magnitude}}, seed, stations);
 }
 
 }  // namespace brakefit::sim2

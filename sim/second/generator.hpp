@@ -45,6 +45,9 @@ struct RunCase {
   // the vehicle (ground)
   double mass_kg = 1500, load_per_decel = 0;  ///< relative load change per m/s^2 (0: none)
   double pitch_lag_s = 0;  ///< the body's pitch: the load follows the deceleration this late
+  /// The roller's drive slows under the brake's load (its motor's slip): the roller speed settles
+  /// at V0 (1 - droop F / droop_ref) behind a first-order lag (0: a stiff drive).
+  double roller_droop_ratio = 0, roller_droop_ref_n = 1, roller_droop_tau_s = 0.2;
   double other_brakes_ratio = 2.0;  ///< the other wheels' brake force / this wheel's, per bar
   double other_mu = 1.0;            ///< the other wheels' friction limit (x their load)
   TesterExport tester;
@@ -55,25 +58,38 @@ struct RunCase {
 /// format; the header carries what a station knows: bench, radii, load, gain, pressure, speed).
 std::string simulate_event_csv(const RunCase& c);
 
-/// The tyres of sim/second/tyres/*.tir, parsed (read from the source tree).
+/// The tyres of sim/second/tyres/*.tir, parsed (read from the source tree): cars and vans.
 const std::vector<Mf61Longitudinal>& tyre_library();
+/// The heavy-vehicle tyres of sim/second/tyres/heavy/*.tir (loads to 40 kN, E down to -8).
+const std::vector<Mf61Longitudinal>& heavy_tyre_library();
+
+/// Which stations a set is drawn from. Cars: a car or van on a 5 km/h roller (three pedal ramps)
+/// or at 30, 50 and 70 km/h on the ground, exported at 500 or 1000 Hz. Every: the exports
+/// stations make: 50-1000 Hz, 2-6 runs a set, rollers at 2-6 km/h whose drive droops under the
+/// brake's load, a heavy vehicle in a quarter of the sets (a truck tyre at 18-40 kN, air brakes
+/// to 8 bar, 2-3 km/h on the roller), ground runs spread over 30-130 km/h (trucks to 90).
+enum class Stations { Cars, Every };
 
 /// A set of three runs of one tyre, vehicle and effect, as the referee draws it. effect: a gap
 /// effect name, "none" or "misspecified"; magnitude in the diagnosis parameter's unit (for
 /// load_transfer it is overwritten with the D scale per m/s^2 of the drawn vehicle and tyre).
 struct SetDraw {
   std::vector<RunCase> runs;
+  std::string station;             ///< what was drawn: vehicle, runs, export rate, roller speed
   double magnitude = 0;            ///< the first effect's
   std::vector<double> magnitudes;  ///< each effect's, in the order given
 };
 SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitude,
-                 std::uint64_t seed);
+                 std::uint64_t seed, Stations stations = Stations::Cars);
 /// Several effects in one set (the referee's pairs); the tyre, vehicle and export are drawn as
-/// for one effect of the same seed.
+/// for one effect of the same seed. A heavy vehicle's brake threshold and wheel inertia are
+/// scaled to it (the threshold by its air brakes' 8 bar against 160, the inertia by R^2 Fz) and
+/// the truth in magnitudes says so.
 struct EffectDraw {
   std::string effect;
   double magnitude = 0;
 };
-SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, std::uint64_t seed);
+SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, std::uint64_t seed,
+                 Stations stations = Stations::Cars);
 
 }  // namespace brakefit::sim2
