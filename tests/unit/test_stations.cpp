@@ -143,6 +143,13 @@ TEST(Stations, ADroopingRollerIsRebuiltWithItsDroop) {
     EXPECT_GT(span, set.runs.front().tester.speed_step_mps) << "run " << k << " droops";
     EXPECT_LT(rms, 0.15 * set.runs.front().tester.speed_step_mps) << "run " << k;
   }
+}
+
+TEST(Stations, ANullSetOnADroopingRollerSaysNone) {
+  // The same set diagnosed: with the roller's speed rebuilt with its droop, nothing is left.
+  const auto set =
+      sim2::draw_set(can::BenchKind::Roller, "none", 0, 1000003, sim2::Stations::Every);
+  const auto q = conditioned(set, false);
   const auto rep =
       gap::diagnose(q, sim::pooled_start(q), gap::calibrated_options(gap::Condition::Roller));
   EXPECT_EQ(rep.verdict, std::vector<std::string>{"none"});
