@@ -69,6 +69,7 @@ sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Genera
   const std::string cname = fmt::format("{} {}", gap::to_string(c), sim::to_string(gen));
   std::cerr << fmt::format("[{}] calibrating the gates on {} null sets...\n", cname, st.calib);
   sim::GateCalibration gates;
+  std::vector<std::uint64_t> seeds;  // of the null sets scored
   {
     // calibrate_gates is sequential; split its null sets over the threads by hand.
     const auto per = bench::parallel_map<sim::GateCalibration>(
@@ -78,17 +79,26 @@ sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Genera
                                       gap::Options{}, gen);
         },
         cname + " null sets");
-    for (const auto& g : per) {
+    for (std::size_t i = 0; i < per.size(); ++i) {
+      const auto& g = per[i];
+      if (g.null_best_gain.empty()) {  // refused: too few usable runs
+        ++gates.refused;
+        std::cerr << fmt::format("[{}] null set of seed {} refused by the diagnosis\n", cname,
+                                 kCalibrationSeed0 + i);
+        continue;
+      }
+      seeds.push_back(kCalibrationSeed0 + i);
       gates.null_best_gain.push_back(g.null_best_gain.front());
       gates.null_best_delta_bic.push_back(g.null_best_delta_bic.front());
       gates.null_gap_over_floor.push_back(g.null_gap_over_floor.front());
     }
     sim::set_gates(gates);
   }
+  if (gates.null_best_gain.empty())
+    throw std::runtime_error(fmt::format("{}: every null set was refused", cname));
   const auto largest = std::max_element(gates.null_best_gain.begin(), gates.null_best_gain.end());
-  std::cerr << fmt::format(
-      "[{}] the largest null gain is the null set of seed {}\n", cname,
-      kCalibrationSeed0 + static_cast<std::uint64_t>(largest - gates.null_best_gain.begin()));
+  std::cerr << fmt::format("[{}] the largest null gain is the null set of seed {}\n", cname,
+                           seeds[static_cast<std::size_t>(largest - gates.null_best_gain.begin())]);
   std::cerr << fmt::format(
       "[{}] null best-candidate gain: median {:.3f}, max {:.3f}; best dBIC min {:.1f}; gates: "
       "gain >= {:.3f}, dBIC <= -{:.1f} (shipped: {:.3f}, -{:.1f}); null gap / floor: median "

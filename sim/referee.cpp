@@ -480,7 +480,13 @@ GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
     Injection none;
     none.condition = c;
     none.generator = gen;
-    const gap::Report rep = diagnose_blind(c, none, seed0 + static_cast<std::uint64_t>(i), probe);
+    gap::Report rep;
+    try {
+      rep = diagnose_blind(c, none, seed0 + static_cast<std::uint64_t>(i), probe);
+    } catch (const InputError&) {
+      ++g.refused;  // a null set the diagnosis refuses has no scores to set a gate by
+      continue;
+    }
     double best_gain = -1e9, best_bic = 1e9;
     for (const auto& e : rep.effects) {
       best_gain = std::max(best_gain, e.gain);
@@ -499,6 +505,7 @@ constexpr double kNullGapMargin = 1.1;  ///< fit-quality factor over the largest
 }  // namespace
 
 void set_gates(GateCalibration& g) {
+  if (g.null_best_gain.empty() || g.null_best_delta_bic.empty()) return;  // all refused
   const double max_gain = *std::max_element(g.null_best_gain.begin(), g.null_best_gain.end());
   const double min_bic =
       *std::min_element(g.null_best_delta_bic.begin(), g.null_best_delta_bic.end());

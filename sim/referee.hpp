@@ -121,6 +121,7 @@ struct GateCalibration {
   /// Each null set's held-out gap over its noise floor: the structure the conditioning leaves
   /// on data with no effect (a quantised, rippled export leaves some; see set_gates).
   std::vector<double> null_gap_over_floor;
+  int refused = 0;  ///< null sets the diagnosis refused (too few usable runs): not scored
 };
 /// Diagnoses n null sets of a condition (seeds seed0, seed0+1, ...) and sets the gates above what
 /// they show: gain gate = max(start gate, 1.5 x the largest best-candidate gain), BIC likewise.
