@@ -42,6 +42,7 @@ Run process_run(const std::string& path, const RunOptions& o, const Model* model
     const pipeline::EventCsv ev = pipeline::parse_event_csv(text, path);
     run.calibration = ev.calibration;
     pipeline::PipelineOptions po = o.pipeline;
+    po.events = pipeline::event_csv_settings(ev, po.events);
     if (po.force == pipeline::ForceSource::Tester && !ev.has_force)
       throw InputError(path + ": --force tester needs a force_n column");
     pipeline::Pipeline p(run.calibration, po, model);

@@ -384,6 +384,7 @@ void append_event_csv_runs(std::vector<gap::Run>& out, const std::string& text,
   const auto csv = pipeline::parse_event_csv(text, name);
   pipeline::PipelineOptions o;
   o.fit = false;
+  o.events = pipeline::event_csv_settings(csv, o.events);
   pipeline::Pipeline p(csv.calibration, o, nullptr);
   for (const auto& smp : csv.samples) p.feed(smp);
   p.finish_file();

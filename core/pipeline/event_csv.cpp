@@ -10,6 +10,9 @@
 
 namespace brakefit::pipeline {
 
+/// An export's start pressure at most this share of its largest pressure (see event_csv_settings).
+constexpr double kExportStartShareOfMax = 0.1;
+
 namespace {
 
 std::string_view trim(std::string_view s) {
@@ -44,6 +47,18 @@ void spread_repeated_stamps(std::vector<Sample>& s) {
 }
 
 }  // namespace
+
+EventSettings event_csv_settings(const EventCsv& ev, EventSettings configured) {
+  double max_bar = 0;
+  for (const auto& s : ev.samples) max_bar = std::max(max_bar, s.pressure_bar);
+  const double scale =
+      configured.start_pressure_bar > 0 && max_bar > 0
+          ? std::min(1.0, kExportStartShareOfMax * max_bar / configured.start_pressure_bar)
+          : 1.0;
+  configured.start_pressure_bar *= scale;
+  configured.release_pressure_bar *= scale;
+  return configured;
+}
 
 bool looks_like_event_csv(std::string_view text) {
   const auto first = trim(text.substr(0, text.find('\n')));

@@ -27,6 +27,11 @@ struct EventCsv {
 /// a time stamp before the previous one). Rows sharing a stamp are spread evenly up to the next.
 EventCsv parse_event_csv(std::string_view text, const std::string& source);
 std::string format_event_csv(const Event& e, const Calibration& c);
+/// The event settings for one exported event: an export is one event its tester already cut, so
+/// where its pressures stay low (air brakes: 8 bar, the wheel at its peak by 2-4 bar) the start
+/// and release pressures are scaled down to a tenth of its largest pressure; a hydraulic
+/// export (tens of bar) keeps the configured ones.
+EventSettings event_csv_settings(const EventCsv& ev, EventSettings configured);
 /// True when the text looks like an event CSV rather than a candump log.
 bool looks_like_event_csv(std::string_view text);
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/pipeline/event_csv.hpp"
 #include "core/pipeline/pipeline.hpp"
 
 using namespace brakefit;
@@ -118,4 +119,38 @@ TEST(TyreLimits, AnEventsFitIsJudgedAgainstItsWheelLoad) {
   ASSERT_EQ(ev[0].results.size(), 1u);
   ASSERT_FALSE(ev[0].results[0].implausible.empty());
   EXPECT_NE(ev[0].results[0].implausible.back().find("peak friction"), std::string::npos);
+}
+
+TEST(EventLimits, AnAirBrakedExportStartsAtItsOwnRiseNotAtTwoBar) {
+  // A heavy vehicle's export: air brakes, the wheel at its peak by 2.4 bar. At the configured 2 bar
+  // start its event held the last few samples before the lock (too_short); scaled to a tenth of
+  // its largest pressure it starts at the rise.
+  Calibration cal;
+  cal.bench = can::BenchKind::Ground;
+  cal.wheel_radius_m = 0.5;
+  cal.brake_gain_n_per_bar = 9000;
+  EventCsv air, hydraulic;
+  for (int i = 0; i <= 300; ++i) {
+    const double p = std::max(0.0, 0.01 * (i - 50));  // 10 bar/s from 0.05 s
+    const double slip = std::min(0.9, 0.03 * p);
+    air.samples.push_back(at(i, 20.0, 20.0 * (1 - slip), p));
+    hydraulic.samples.push_back(at(i, 20.0, 20.0, 30 * p));
+  }
+  const EventSettings base;
+  const EventSettings s = event_csv_settings(air, base);
+  EXPECT_NEAR(s.start_pressure_bar, 0.25, 1e-9);
+  EXPECT_NEAR(s.release_pressure_bar, 0.125, 1e-9);
+  EXPECT_EQ(event_csv_settings(hydraulic, base).start_pressure_bar, base.start_pressure_bar);
+  auto samples_of = [&](const EventSettings& es) {
+    PipelineOptions o;
+    o.fit = false;
+    o.events = es;
+    Pipeline p(cal, o, nullptr);
+    for (const auto& smp : air.samples) p.feed(smp);
+    p.finish_file();
+    std::size_t n = 0;
+    for (const auto& e : p.events()) n = std::max(n, e.event.samples.size());
+    return n;
+  };
+  EXPECT_GT(samples_of(s), samples_of(base) + 150);
 }
