@@ -74,6 +74,22 @@ std::vector<double> drooping_roller_speed(const std::vector<double>& t_s,
   const std::size_t n = t_s.size();
   if (n < 20 || v.size() != n || force_n.size() != n || step_mps <= 0 || roller_radius_m <= 0)
     return {};
+  // The staircase itself must droop: its mean over the samples under the top fifth of the load
+  // at least half a step below its mean over the bottom fifth (averaged over the levels an
+  // encoder's ripple dithers, a held roller's two means agree).
+  {
+    const auto load = lagged_load(t_s, force_n, 0.0);
+    double lo_sum = 0, hi_sum = 0;
+    std::size_t lo_n = 0, hi_n = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (load[i] < 0.2) lo_sum += v[i], ++lo_n;
+      if (load[i] > 0.8) hi_sum += v[i], ++hi_n;
+    }
+    if (lo_n == 0 || hi_n == 0 ||
+        !(lo_sum / static_cast<double>(lo_n) - hi_sum / static_cast<double>(hi_n) >=
+          kMinDroopSteps * step_mps))
+      return {};
+  }
   std::vector<std::size_t> at;  // the sample after each transition
   for (std::size_t i = 1; i < n; ++i)
     if (v[i] != v[i - 1]) at.push_back(i);
