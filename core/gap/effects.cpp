@@ -103,7 +103,7 @@ EffectParam effect_param(Effect e) {
     case Effect::TimeOffset:
       return {"dt_s", -0.3, 0.3, 0.0};
     case Effect::WheelInertia:
-      return {"inertia_kgm2", 0.0, 20.0, 0.5};
+      return {"inertia_kgm2", 0.0, 100.0, 0.5};  // a truck wheel end: 20-80 kg m^2
     case Effect::BrakeThreshold:
       return {"p0_bar", 0.0, 30.0, 1.0};  // a dead zone: the pads bite from p0 on
     case Effect::SlipOffset:
