@@ -74,10 +74,14 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
 /// first harmonics to the staircase). Empty when the run is too short to tell them apart.
 std::vector<double> held_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
                                       double roller_radius_m);
+/// A roller's ripple is fitted (held_roller_speed, drooping_roller_speed) when the run spans this
+/// many of its turns.
+inline constexpr double kHeldRollerMinTurns = 1.0;
 /// A roller whose drive droops under the brake's force, read through a quantised channel
 /// (roller_droop.cpp): its speed as a level, a droop following the force behind a lag (0-0.4 s), a
-/// slow trend and the ripple, fitted to the staircase's transitions. Empty where the droop is
-/// under a step over the run (a held roller) or the run has fewer than three transitions.
+/// slow trend and the ripple, fitted to the staircase's transitions. Empty where the staircase
+/// does not droop by half a step between its lightest and heaviest fifths of load (a held roller),
+/// or the fit misses the transitions.
 std::vector<double> drooping_roller_speed(const std::vector<double>& t_s,
                                           const std::vector<double>& v,
                                           const std::vector<double>& force_n,

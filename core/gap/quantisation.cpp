@@ -10,9 +10,6 @@
 
 namespace brakefit::gap {
 
-/// A held roller's ripple is fitted when the run spans this many of its turns.
-constexpr double kHeldRollerMinTurns = 1.0;
-
 /// Samples an excursion into a level must last to be shaped as a peak (see dequantise).
 constexpr std::size_t kMinExcursionSamples = 4;
 

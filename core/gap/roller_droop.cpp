@@ -20,8 +20,6 @@ namespace {
 constexpr std::array<double, 5> kDroopLags{0.0, 0.05, 0.1, 0.2, 0.4};
 /// Transitions needed for the slow trend's two columns, and for the ripple's four.
 constexpr std::size_t kTrendTransitions = 20, kRippleTransitions = 16;
-/// A held roller's ripple is fitted when the run spans this many of its turns.
-constexpr double kMinTurns = 1.0;
 /// A droop under this many steps over the run is left to the held roller's fit.
 constexpr double kMinDroopSteps = 0.5;
 /// The fit's RMS miss at the transitions, in steps, above which the model is not the roller's.
@@ -99,10 +97,10 @@ std::vector<double> drooping_roller_speed(const std::vector<double>& t_s,
   const double span = std::max(t_s.back() - t_s.front(), 1e-6);
   Columns cols;
   cols.trend = at.size() >= kTrendTransitions;
-  cols.harmonics =
-      at.size() >= kRippleTransitions && mean * span / (2 * M_PI * roller_radius_m) >= kMinTurns
-          ? 2
-          : 0;
+  cols.harmonics = at.size() >= kRippleTransitions &&
+                           mean * span / (2 * M_PI * roller_radius_m) >= kHeldRollerMinTurns
+                       ? 2
+                       : 0;
   // One row more: the roller before the brake (its first level, at the load there) pins the
   // level where a droop of a step or two crossed one boundary only.
   const auto m = static_cast<Eigen::Index>(at.size()) + 1;
