@@ -58,8 +58,6 @@ constexpr double kRunawayMinSlip = 0.02;
 /// few 0.01 bar to the fits (generator A's null BIC drops 6.7 -> 25).
 constexpr double kRestPressureBar = 0.2;
 
-/// A run shorter than this (samples up to the lock or runaway) cannot be smoothed and fitted.
-constexpr std::size_t kMinRunSamples = 12;
 /// The smoother's half window spans at most this long: 10 samples at 500 Hz and up; at 100 Hz
 /// ten samples (0.1 s each side) would bend a 0.35 s ramp's kinks into structure no effect
 /// explains (a null generator C ground set read `unexplained` at a floor of 15 N).

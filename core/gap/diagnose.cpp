@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
@@ -42,6 +43,26 @@ void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& f
   name_verdict(rep, o);
 }
 
+/// Runs of a low-rate export (a fast stop at 50 Hz: 8-11 samples to the lock) are diagnosed with
+/// the others; the report says what such a run cannot tell on its own.
+std::string short_runs_note(const std::vector<Run>& runs) {
+  std::size_t n_short = 0, fewest = SIZE_MAX;
+  double widest_s = 0;
+  for (const Run& r : runs) {
+    if (r.t_s.size() >= kShortRunSamples) continue;
+    ++n_short;
+    fewest = std::min(fewest, r.t_s.size());
+    widest_s =
+        std::max(widest_s, (r.t_s.back() - r.t_s.front()) / static_cast<double>(r.t_s.size() - 1));
+  }
+  if (n_short == 0) return {};
+  return fmt::format(
+      "{} of {} runs hold fewer than {} samples up to the lock (the fewest {}, {:.0f} ms apart): "
+      "each is fitted pooled with the others and checked held out against them; on its own such "
+      "a run fixes neither the curve's shape nor a lag or offset shorter than its sample interval",
+      n_short, runs.size(), kShortRunSamples, fewest, 1e3 * widest_s);
+}
+
 }  // namespace
 
 Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Options& o) {
@@ -55,11 +76,14 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   std::vector<Run> runs;
   for (const Run& r : runs_in) {
     Run cut = cap ? up_to(r, r.force_n, 0.98 * cap->cap_n) : r;
-    if (cut.t_s.size() >= 20) runs.push_back(std::move(cut));
+    if (cut.t_s.size() >= kMinRunSamples) runs.push_back(std::move(cut));
   }
   if (runs.size() < 2)
-    throw InputError("gap diagnosis: fewer than two runs with 20 samples below the force cap");
+    throw InputError(
+        fmt::format("gap diagnosis: fewer than two runs with {} samples up to the lock{}",
+                    kMinRunSamples, cap ? " and below the force cap" : ""));
   Report rep;
+  if (std::string note = short_runs_note(runs); !note.empty()) rep.notes.push_back(note);
   // A constant quantised reference leaves a slip bias common to the runs within half a step: a
   // nuisance term of every fit (the baseline too), not an effect.
   for (const Run& r : runs)
@@ -200,12 +224,13 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
     Run cut = capped ? up_to(r, r.force_n, cap_n) : up_to(r, r.slip, max_slip);
     total += r.t_s.size();
     dropped += r.t_s.size() - cut.t_s.size();
-    if (cut.t_s.size() >= 20) road.push_back(std::move(cut));
+    if (cut.t_s.size() >= kMinRunSamples) road.push_back(std::move(cut));
   }
   if (road.size() < 2)
-    throw InputError(
+    throw InputError(fmt::format(
         "bench-vs-bench gap needs at least two road runs (each transfer effect is checked on a "
-        "road run it was not fitted to) with 20 samples within the roller runs' reach");
+        "road run it was not fitted to) with {} samples within the roller runs' reach",
+        kMinRunSamples));
   if (dropped > 0)
     rep.notes.push_back(
         capped ? fmt::format("the road runs are compared up to the roller's cap, {:.0f} N ({} of "
@@ -238,7 +263,7 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
     // the roller curve; after: the road up to the cap (where the rest was ranked).
     std::vector<Run> whole;
     for (const Run& r : road_all)
-      if (r.t_s.size() >= 20) whole.push_back(r);
+      if (r.t_s.size() >= kMinRunSamples) whole.push_back(r);
     const double up_to_cap = rep.gap_before_rmse_n;
     put_cap_first(rep, cap_n, heldout(whole, {}, fit));
     rep.notes.push_back(fmt::format(

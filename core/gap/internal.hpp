@@ -74,6 +74,12 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
 /// first harmonics to the staircase). Empty when the run is too short to tell them apart.
 std::vector<double> held_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
                                       double roller_radius_m);
+/// A run shorter than this (samples up to the lock or runaway, below a force cap) cannot be
+/// smoothed and fitted. A 50 Hz export of a fast ground stop holds 8-11 samples from the pressure's
+/// rise to the lock: few, but its linear region and peak, and the runs are fitted pooled.
+inline constexpr std::size_t kMinRunSamples = 8;
+/// Runs shorter than this are diagnosed, and the report says what they cannot tell alone.
+inline constexpr std::size_t kShortRunSamples = 20;
 /// A roller's ripple is fitted (held_roller_speed, drooping_roller_speed) when the run spans this
 /// many of its turns.
 inline constexpr double kHeldRollerMinTurns = 1.0;

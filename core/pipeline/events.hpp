@@ -22,9 +22,10 @@ struct EventSettings {
   double release_pressure_bar = 1.0;
   double lock_slip_ratio = 0.95;
   double min_ref_speed_mps = 0.3;
-  /// A station's export may sample at 100 Hz or less: a 0.6 s stop there has 60 samples, of
-  /// which the braking part may hold 15. Below this many the event is too_short.
-  std::size_t min_points = 12;
+  /// A station's export may sample at 50 Hz: a fast ground stop there holds 8-11 samples from the
+  /// pressure's rise to the lock, its linear region and its peak. Below this many (the fewest a
+  /// curve fit takes) the event is too_short.
+  std::size_t min_points = 8;
   /// A real ground stop is short: at 250 bar/s from 30 km/h a light wheel locks 0.18 s after the
   /// pressure rise (generator B); 0.2 s refused such events as too short.
   double min_duration_s = 0.1;

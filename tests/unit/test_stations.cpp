@@ -167,3 +167,22 @@ TEST(Stations, AHeldRollerIsNotReadAsDrooping) {
     }
   }
 }
+
+TEST(Stations, AFiftyHertzGroundStopIsDiagnosedNotRefused) {
+  // Seed 101006 of the every-station draw: six ground stops exported at 50 Hz, each 8-11 samples
+  // from the pressure's rise to the lock. Every one is a run of the diagnosis (none dropped as
+  // too short), the set is diagnosed, and the report says what such runs cannot tell alone.
+  const auto set = sim2::draw_set(can::BenchKind::Ground, "none", 0, 101006, sim2::Stations::Every);
+  ASSERT_DOUBLE_EQ(set.runs.front().tester.sample_hz, 50.0);
+  const auto q = conditioned(set, false);
+  ASSERT_EQ(q.size(), set.runs.size());
+  std::size_t longest = 0;
+  for (const auto& r : q) longest = std::max(longest, r.t_s.size());
+  EXPECT_LT(longest, 20u);
+  const auto rep =
+      gap::diagnose(q, sim::pooled_start(q), gap::calibrated_options(gap::Condition::Ground));
+  EXPECT_EQ(rep.verdict, std::vector<std::string>{"none"});
+  EXPECT_TRUE(std::any_of(rep.notes.begin(), rep.notes.end(), [](const std::string& n) {
+    return n.find("fewer than 20 samples up to the lock") != std::string::npos;
+  }));
+}
