@@ -59,6 +59,11 @@ std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs) {
   return e;
 }
 
+bool cap_at_fitted_peak(CapEvidence& e, const std::vector<Run>& runs, const MfParams& start) {
+  e.fitted_peak_ratio = fit_runs(pointers(runs), {}, start).params[2] / e.cap_n;
+  return e.fitted_peak_ratio <= kCapAtPeakRatio;
+}
+
 double cap_kink_ratio(const std::vector<Run>& runs, double cap_n) {
   double ratio = INFINITY;
   for (const Run& r : runs) {

@@ -72,7 +72,19 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         "to)");
   // A force cap (a two-roller cradle): the runs end in a runaway at the cap; the samples from 98 %
   // of the cap on are that runaway, not the tyre, and are left out.
-  const auto cap = cradle_cap_evidence(runs_in);
+  auto cap = cradle_cap_evidence(runs_in);
+  std::string cap_at_peak;
+  if (cap && cap_at_fitted_peak(*cap, runs_in, start)) {
+    cap_at_peak = fmt::format(
+        "every run ran away at {:.0f} N (spread {:.1f} %) with its force still rising ({:.0f} % of "
+        "the initial slope), as at a cradle's cap, but a Magic Formula fitted to the whole runs "
+        "peaks there ({:.3f}x that force): the tyre's own sharp peak (a large negative E) and a "
+        "cap "
+        "at the peak cannot be told apart on these runs, so no cap is named (a cap below the peak "
+        "leaves a curve still rising, fitted past it)",
+        cap->cap_n, 100 * cap->spread, 100 * cap->end_slope_ratio, cap->fitted_peak_ratio);
+    cap.reset();
+  }
   std::vector<Run> runs;
   for (const Run& r : runs_in) {
     Run cut = cap ? up_to(r, r.force_n, 0.98 * cap->cap_n) : r;
@@ -83,6 +95,7 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         fmt::format("gap diagnosis: fewer than two runs with {} samples up to the lock{}",
                     kMinRunSamples, cap ? " and below the force cap" : ""));
   Report rep;
+  if (!cap_at_peak.empty()) rep.notes.push_back(cap_at_peak);
   if (std::string note = short_runs_note(runs); !note.empty()) rep.notes.push_back(note);
   // A constant quantised reference leaves a slip bias common to the runs within half a step: a
   // nuisance term of every fit (the baseline too), not an effect.

@@ -277,8 +277,19 @@ struct CapEvidence {
   double cap_n = 0.0;            ///< mean runaway force
   double spread = 0.0;           ///< (max - min) / mean of the runaway forces
   double end_slope_ratio = 0.0;  ///< smallest end / initial slope over the runs
+  /// The peak (D) of a Magic Formula fitted to the whole runs, over the cap: a cap below the tyre's
+  /// peak cuts a curve still rising, which the fit carries on past it (generator A's cradles:
+  /// 1.06-1.22); a tyre that ran away at its own sharp peak puts D there (a truck tyre with E
+  /// down to -7: 0.996-1.013).
+  double fitted_peak_ratio = NAN;
 };
 std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs);
+/// A Magic Formula fitted to the whole runs peaks within this of the runaway force: the runs
+/// ended at the tyre's own peak or at a cap no lower than it, which the runs cannot tell apart.
+inline constexpr double kCapAtPeakRatio = 1.03;
+/// Sets e.fitted_peak_ratio from a baseline fit of the whole runs (from start); true where it is
+/// at most kCapAtPeakRatio.
+bool cap_at_fitted_peak(CapEvidence& e, const std::vector<Run>& runs, const MfParams& start);
 
 /// The gates calibrated on null data of the condition by bench/gap_referee --calibrate (the
 /// figures are in docs/gap.md); the other options as in base.
