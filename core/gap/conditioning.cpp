@@ -14,6 +14,13 @@ namespace brakefit::gap {
 
 namespace {
 
+/// A drooping roller's rebuilt speed, and its droop kept for the runs that could not show it.
+void take_droop(Run& r, RollerDroop&& d) {
+  r.v_ref_mps = std::move(d.v_ref_mps);
+  r.roller_droop_mps_per_n = d.mps_per_n;
+  r.roller_droop_lag_s = d.lag_s;
+}
+
 /// Least-squares line through the samples of the first window_s of a run.
 struct StartLine {
   double at_start = 0.0, slope = 0.0;
@@ -173,14 +180,15 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       if (c.bench == can::BenchKind::Roller) {
         if (auto droop =
                 drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n, c.roller_radius_m, q);
-            !droop.empty()) {
-          full.v_ref_mps = std::move(droop);
+            !droop.v_ref_mps.empty()) {
+          take_droop(full, std::move(droop));
           ref_smooth = true;
         } else {
           double mean = 0;
           for (double v : full.v_ref_mps) mean += v;
           mean /= static_cast<double>(full.v_ref_mps.size());
           std::fill(full.v_ref_mps.begin(), full.v_ref_mps.end(), mean);
+          full.roller_held_quantised = true;
         }
       }
     } else if (c.bench == can::BenchKind::Roller && ref_noise.step > 0 &&
@@ -191,11 +199,18 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       // not the roller's (the roller is held by its motor): the speed is the smooth trend under
       // it, fitted to the staircase.
       // A roller whose drive droops under the brake's load is rebuilt with the droop.
-      auto trend =
+      auto droop =
           drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n, c.roller_radius_m, q);
-      if (trend.empty()) trend = held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
+      const bool drooping = !droop.v_ref_mps.empty();
+      std::vector<double> trend =
+          drooping ? droop.v_ref_mps
+                   : held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
       if (!trend.empty()) {
-        full.v_ref_mps = std::move(trend);
+        if (drooping)
+          take_droop(full, std::move(droop));
+        else
+          full.v_ref_mps = std::move(trend);
+        full.roller_held_quantised = !drooping;
         full.ref_bias_bound = half_step_ratio;
         ref_smooth = true;
       }
@@ -207,8 +222,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   if (c.bench == can::BenchKind::Roller && !ref_smooth && ref_noise.step > 0)
     if (auto droop = drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n,
                                            c.roller_radius_m, ref_noise.step);
-        !droop.empty()) {
-      full.v_ref_mps = std::move(droop);
+        !droop.v_ref_mps.empty()) {
+      take_droop(full, std::move(droop));
       ref_smooth = true;
     }
   // A roller's wheel held on one level before it slows (rolling free while the pressure rises
@@ -347,6 +362,9 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.held_level_mps = full.held_level_mps;
   r.held_step_mps = full.held_step_mps;
   r.held_until_s = full.held_until_s;
+  r.roller_droop_mps_per_n = full.roller_droop_mps_per_n;
+  r.roller_droop_lag_s = full.roller_droop_lag_s;
+  r.roller_held_quantised = full.roller_held_quantised;
   for (std::size_t i : idx) {
     r.t_s.push_back(full.t_s[i]);
     r.slip.push_back(full.slip[i]);

@@ -96,6 +96,7 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
                     kMinRunSamples, cap ? " and below the force cap" : ""));
   Report rep;
   if (!cap_at_peak.empty()) rep.notes.push_back(cap_at_peak);
+  if (std::string note = share_roller_droop(runs); !note.empty()) rep.notes.push_back(note);
   if (std::string note = short_runs_note(runs); !note.empty()) rep.notes.push_back(note);
   // A constant quantised reference leaves a slip bias common to the runs within half a step: a
   // nuisance term of every fit (the baseline too), not an effect.

@@ -88,10 +88,19 @@ inline constexpr double kHeldRollerMinTurns = 1.0;
 /// slow trend and the ripple, fitted to the staircase's transitions. Empty where the staircase
 /// does not droop by half a step between its lightest and heaviest fifths of load (a held roller),
 /// or the fit misses the transitions.
-std::vector<double> drooping_roller_speed(const std::vector<double>& t_s,
-                                          const std::vector<double>& v,
-                                          const std::vector<double>& force_n,
-                                          double roller_radius_m, double step_mps);
+struct RollerDroop {
+  std::vector<double> v_ref_mps;  ///< the rebuilt speed (empty: not a drooping roller)
+  double mps_per_n = 0.0;         ///< the speed lost per newton of lagged force (> 0)
+  double lag_s = 0.0;
+};
+RollerDroop drooping_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
+                                  const std::vector<double>& force_n, double roller_radius_m,
+                                  double step_mps);
+/// One roller drive droops alike in every run of a station: a run whose droop stayed under half a
+/// quantisation step (a short stop, its staircase held on one level) takes the median droop of
+/// the runs where it was fitted, its mean speed kept (the slip recomputed). Returns a note, or
+/// empty where no run was changed.
+std::string share_roller_droop(std::vector<Run>& runs);
 /// A fifth wheel's ripple is read from its own speed on runs spanning this many revolutions.
 /// Over fewer the trend's misfit (a spline knotted every 0.75 revolutions) projects onto the
 /// ripple's columns as much as onto its neighbours': 10 of generator B's 140 ground runs of

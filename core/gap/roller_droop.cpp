@@ -5,6 +5,7 @@
 // unbiased only where a ripple of a step or more dithers the levels; a droop of two or three steps
 // over a short run leaves a few transitions and long stretches on one level, where the
 // staircase's least squares put the speed half a step off (a slip error of 5e-4 at 1.1 m/s).
+#include <fmt/format.h>
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
@@ -24,6 +25,9 @@ constexpr std::size_t kTrendTransitions = 20, kRippleTransitions = 16;
 constexpr double kMinDroopSteps = 0.5;
 /// The fit's RMS miss at the transitions, in steps, above which the model is not the roller's.
 constexpr double kMaxMissSteps = 0.35;
+/// A run read as held takes a station's droop only where it droops by at most this many steps
+/// over the run (more, and its staircase would have shown it).
+constexpr double kMaxSharedDroopSteps = 1.0;
 
 /// The force behind a first-order lag, over the largest force (0-1).
 std::vector<double> lagged_load(const std::vector<double>& t_s, const std::vector<double>& f,
@@ -65,10 +69,9 @@ void fill_row(Eigen::MatrixXd& a, Eigen::Index row, const Columns& c, double loa
 
 }  // namespace
 
-std::vector<double> drooping_roller_speed(const std::vector<double>& t_s,
-                                          const std::vector<double>& v,
-                                          const std::vector<double>& force_n,
-                                          double roller_radius_m, double step_mps) {
+RollerDroop drooping_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
+                                  const std::vector<double>& force_n, double roller_radius_m,
+                                  double step_mps) {
   const std::size_t n = t_s.size();
   if (n < 20 || v.size() != n || force_n.size() != n || step_mps <= 0 || roller_radius_m <= 0)
     return {};
@@ -135,12 +138,68 @@ std::vector<double> drooping_roller_speed(const std::vector<double>& t_s,
   // roller does not speed up under the load it carries.
   if (!(-best(1) >= kMinDroopSteps * step_mps)) return {};
   const auto load = lagged_load(t_s, force_n, best_tau);
-  std::vector<double> out(n);
+  RollerDroop out;
+  out.v_ref_mps.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double u = (t_s[i] - t_s.front()) / span;
-    out[i] = best(0) + best(1) * load[i] + (cols.trend ? best(2) * u + best(3) * u * u : 0.0);
+    out.v_ref_mps[i] =
+        best(0) + best(1) * load[i] + (cols.trend ? best(2) * u + best(3) * u * u : 0.0);
   }
+  double f_max = 0;
+  for (double f : force_n) f_max = std::max(f_max, std::abs(f));
+  out.mps_per_n = -best(1) / f_max;  // lagged_load is over the run's largest force
+  out.lag_s = best_tau;
   return out;
+}
+
+std::string share_roller_droop(std::vector<Run>& runs) {
+  std::vector<const Run*> fitted;
+  for (const Run& r : runs)
+    if (r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0) fitted.push_back(&r);
+  if (fitted.empty()) return {};
+  std::sort(fitted.begin(), fitted.end(), [](const Run* a, const Run* b) {
+    return a->roller_droop_mps_per_n < b->roller_droop_mps_per_n;
+  });
+  const Run& median = *fitted[fitted.size() / 2];
+  const double k = median.roller_droop_mps_per_n, tau_s = median.roller_droop_lag_s;
+  std::size_t changed = 0, refused = 0;
+  double largest_mps = 0;
+  for (Run& r : runs) {
+    if (r.bench != can::BenchKind::Roller || !r.roller_held_quantised || r.t_s.size() < 2) continue;
+    double f_max = 0;
+    for (double f : r.force_n) f_max = std::max(f_max, std::abs(f));
+    const auto load = lagged_load(r.t_s, r.force_n, tau_s);
+    double mean = 0;
+    for (double x : load) mean += x / static_cast<double>(load.size());
+    // The run's staircase did not droop by half a step (it was read as held): a droop of more
+    // than a step over it is not this run's (a droop fitted on one run through a lagging
+    // channel read 1.7 mm/s per kN, 6 steps over another run that held its level).
+    const auto [lo, hi] = std::minmax_element(load.begin(), load.end());
+    if (!(k * f_max * (*hi - *lo) <= kMaxSharedDroopSteps * r.v_ref_step_mps)) {
+      ++refused;
+      continue;
+    }
+    for (std::size_t i = 0; i < r.t_s.size(); ++i) {
+      const double dv = -k * f_max * (load[i] - mean);
+      const double v_new = r.v_ref_mps[i] + dv;
+      if (!(v_new > 0)) continue;
+      r.slip[i] = 1 - (1 - r.slip[i]) * r.v_ref_mps[i] / v_new;
+      r.v_ref_mps[i] = v_new;
+      largest_mps = std::max(largest_mps, std::abs(dv));
+    }
+    r.roller_held_quantised = false;
+    ++changed;
+  }
+  if (changed == 0) return {};
+  return fmt::format(
+      "the roller's drive droops under the brake's force ({:.3g} mm/s per kN behind a {:.2f} s "
+      "lag, the median of {} run(s) whose quantised speed stepped with it): {} run(s) whose droop "
+      "stayed within a step of the channel, read as held, took it (at most {:.2f} mm/s){}",
+      1e6 * k, tau_s, fitted.size(), changed, 1e3 * largest_mps,
+      refused ? fmt::format("; {} held run(s) would have drooped by more than a step and did not "
+                            "take it",
+                            refused)
+              : std::string());
 }
 
 }  // namespace brakefit::gap
