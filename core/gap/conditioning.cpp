@@ -199,21 +199,18 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       // not the roller's (the roller is held by its motor): the speed is the smooth trend under
       // it, fitted to the staircase.
       // A roller whose drive droops under the brake's load is rebuilt with the droop.
-      auto droop =
-          drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n, c.roller_radius_m, q);
-      const bool drooping = !droop.v_ref_mps.empty();
-      std::vector<double> trend =
-          drooping ? droop.v_ref_mps
-                   : held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
-      if (!trend.empty()) {
-        if (drooping)
-          take_droop(full, std::move(droop));
-        else
-          full.v_ref_mps = std::move(trend);
-        full.roller_held_quantised = !drooping;
-        full.ref_bias_bound = half_step_ratio;
+      if (auto droop =
+              drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n, c.roller_radius_m, q);
+          !droop.v_ref_mps.empty()) {
+        take_droop(full, std::move(droop));
+        ref_smooth = true;
+      } else if (auto trend = held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
+                 !trend.empty()) {
+        full.v_ref_mps = std::move(trend);
+        full.roller_held_quantised = true;
         ref_smooth = true;
       }
+      if (ref_smooth) full.ref_bias_bound = half_step_ratio;
     }
   }
   // A roller whose drive droops by many steps: the droop fitted to the transitions, where it is

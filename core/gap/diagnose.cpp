@@ -79,9 +79,8 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         "every run ran away at {:.0f} N (spread {:.1f} %) with its force still rising ({:.0f} % of "
         "the initial slope), as at a cradle's cap, but a Magic Formula fitted to the whole runs "
         "peaks there ({:.3f}x that force): the tyre's own sharp peak (a large negative E) and a "
-        "cap "
-        "at the peak cannot be told apart on these runs, so no cap is named (a cap below the peak "
-        "leaves a curve still rising, fitted past it)",
+        "cap at the peak cannot be told apart on these runs, so no cap is named (a cap below the "
+        "peak leaves a curve still rising, fitted past it)",
         cap->cap_n, 100 * cap->spread, 100 * cap->end_slope_ratio, cap->fitted_peak_ratio);
     cap.reset();
   }

@@ -248,13 +248,7 @@ struct Floor {
   double total_n() const { return std::hypot(force_n, slip_n); }
   double slip_sd_ratio = 0.0;                       ///< RMS slip noise (after smoothing)
   double v_ref_sd_mps = 0.0, v_wheel_sd_mps = 0.0;  ///< RMS over runs
-  double v_ref_step_mps = 0.0, v_wheel_step_mps = 0.0, force_step_n = 0.0;
-  /// A roller whose drive was seen drooping (its quantised speed stepped with the force): the
-  /// speed lost per newton of force behind lag_s (0: not seen). roller_held_quantised: a roller
-  /// read through a quantised channel and taken as held (its mean, or its ripple's trend), which
-  /// a droop under a step would not show (share_roller_droop).
-  double roller_droop_mps_per_n = 0.0, roller_droop_lag_s = 0.0;
-  bool roller_held_quantised = false;  ///< largest
+  double v_ref_step_mps = 0.0, v_wheel_step_mps = 0.0, force_step_n = 0.0;  ///< largest
   /// Runs too short to measure their slip noise on, and the measured runs' speed noise they
   /// took at their own speed (0: none borrowed).
   int borrowed_runs = 0;
