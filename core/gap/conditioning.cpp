@@ -59,6 +59,8 @@ constexpr double kLockSlip = 0.9;
 /// A lock-up runaway starts past the linear region: jumps below this slip are noise. (2 %: a
 /// wheel capped by the cradle below its peak runs away from there.)
 constexpr double kRunawayMinSlip = 0.02;
+/// A runaway's jump stays: this many samples after it are all above the slip before it.
+constexpr std::size_t kRunawayHoldSamples = 2;
 /// The brake is at rest below this pressure: a run starts at the event lead-in's last sample
 /// under it (the rise from rest tells a dead zone from a slip offset). Not earlier: over 50 ms
 /// of rest a pressure channel clipped at zero reads its noise as a mean force, a dead zone of a
@@ -115,14 +117,24 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   // The lock-up runaway: past the peak a wheel can lose speed within one or two frames. There the
   // slip is measured across a single frame and the force is dominated by the wheel's deceleration
   // (I a / R^2, a numerical derivative of a step): not quasi-static data. The run is cut where
-  // the slip first jumps by more than runaway_slip_per_sample between two samples.
+  // the slip first jumps by more than runaway_slip_per_sample between two samples and stays up
+  // (the next kRunawayHoldSamples samples above the level before the jump by that much): a light
+  // wheel on a long relaxation length at 2-3 km/h oscillates by +-4 % slip at 25 Hz, and each
+  // upswing of that is a jump that falls back, not a lock-up.
   // A locked wheel is cut as well: the rim is held by the brake, I w' = F R - Tb no longer holds.
   {
+    auto slip_at = [&](std::size_t k) { return 1.0 - v_wheel[k] / full.v_ref_mps[k]; };
+    auto stays_up = [&](std::size_t i, double level) {
+      for (std::size_t k = i + 1; k < std::min(v_wheel.size(), i + 1 + kRunawayHoldSamples); ++k)
+        if (slip_at(k) <= level) return false;
+      return true;
+    };
     for (std::size_t i = 1; i < v_wheel.size(); ++i) {
-      const double s0 = 1.0 - v_wheel[i - 1] / full.v_ref_mps[i - 1];
-      const double s1 = 1.0 - v_wheel[i] / full.v_ref_mps[i];
+      const double s0 = slip_at(i - 1);
+      const double s1 = slip_at(i);
       const bool runaway = o.runaway_slip_per_sample > 0 && s0 > kRunawayMinSlip &&
-                           s1 - s0 > o.runaway_slip_per_sample;
+                           s1 - s0 > o.runaway_slip_per_sample &&
+                           stays_up(i, s0 + o.runaway_slip_per_sample);
       if (runaway || s1 >= kLockSlip) {
         full.runaway = runaway;
         full.runaway_force_n = full.force_n[i - 1];

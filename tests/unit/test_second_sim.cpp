@@ -254,9 +254,12 @@ TEST(SecondSim, TheRippleIsSeenThroughTheNamedEffectsModel) {
   // smoothed; on the sampler's line (the stamps' scatter gone) it gives 19.6 N, and the lag the
   // models miss splits between the two: relaxation 0.282, 14 % short, and a time offset. What
   // this test holds: the relaxation is named first, within the 15 %, and the ripple seen
-  // through it leaves well under the 36 N the baseline's columns left.
-  const auto t = named_on_b_roller("relaxation_length", 0.3285, 1022, 0.15);
-  EXPECT_LT(t.gap_after_n, 0.6 * 36.1) << "floor " << t.noise_n << " N";
+  // through it leaves under the 36 N the baseline's columns left.
+  // A slip jump that falls back is no runaway (conditioning.cpp): the third run was cut at 3 %
+  // slip by one such jump. Whole, it brings the relaxation within 2 % (0.3235, was 0.2822) and
+  // leaves more of the gap (32.5 N against 19.6 N, the floor 7.8 N; a time offset still follows).
+  const auto t = named_on_b_roller("relaxation_length", 0.3285, 1022, 0.05);
+  EXPECT_LT(t.gap_after_n, 36.1) << "floor " << t.noise_n << " N";
 }
 
 TEST(SecondSim, ALeadingCandidateIsScoredWithTheRippleSeenThroughItsOwnModel) {

@@ -245,3 +245,23 @@ TEST(Stations, AShortRunTakesTheDroopItsStationsLongerRunsShow) {
   for (std::size_t k = 0; k < q.size(); ++k)
     EXPECT_LT(rms_error(q[k], truth[k]), 0.08 * step) << "run " << k;
 }
+
+TEST(Stations, ALightWheelOscillatingOnALongRelaxationLengthIsNotALockUp) {
+  // Seed 1136 of the every-station draw: a 0.4 m relaxation length on a 2.5 km/h roller, sampled
+  // at 100 Hz. A light wheel on that long a spring swings by +-4 % slip at 25 Hz as the brake
+  // comes on; each upswing is a jump of more than 1 % between two samples, and was read as a
+  // lock-up runaway after one sample (the run left out, the set refused). A jump that falls back
+  // is not a runaway: both runs are kept past their swings, and the relaxation length is named.
+  const auto set =
+      sim2::draw_set(can::BenchKind::Roller, "relaxation_length", 0.4, 1136, sim2::Stations::Every);
+  const auto q = conditioned(set, false);
+  ASSERT_EQ(q.size(), set.runs.size());
+  for (const auto& r : q) {
+    EXPECT_GT(r.t_s.back() - r.t_s.front(), 0.15) << r.name << ": cut at the swing";
+    EXPECT_GT(*std::max_element(r.slip.begin(), r.slip.end()), 0.06) << r.name;
+  }
+  const auto rep =
+      gap::diagnose(q, sim::pooled_start(q), gap::calibrated_options(gap::Condition::Roller));
+  EXPECT_NE(std::find(rep.verdict.begin(), rep.verdict.end(), "relaxation_length"),
+            rep.verdict.end());
+}
