@@ -1,0 +1,16 @@
+#pragma once
+// What the referee's draws (referee_draws.cpp) and its trials (referee.cpp) share.
+#include <string>
+
+#include "sim/scenario.hpp"
+
+namespace brakefit::sim::detail {
+
+/// d ln D / d ln Fz of the simulated tyre at the scenario's load: the load transfer's effect on
+/// D (the diagnosis parameter) per unit of relative load change.
+double d_ln_d_per_ln_fz(const Scenario& s);
+
+/// A relaxation (sigma / V) or a time offset: at one speed, one lag.
+bool is_lag(const std::string& e);
+
+}  // namespace brakefit::sim::detail
