@@ -1,7 +1,9 @@
 #include "fleet/pg.hpp"
 
 #include <fmt/format.h>
+
 #include <libpq-fe.h>
+#include <algorithm>
 
 #include <regex>
 
@@ -116,9 +118,15 @@ void Pg::copy_in(const std::string& copy_sql, const std::string& rows) {
     throw PgError("COPY did not start", "");
   }
   PQclear(start);
-  if (PQputCopyData(c_, rows.data(), static_cast<int>(rows.size())) != 1 ||
-      PQputCopyEnd(c_, nullptr) != 1)
-    throw PgError(fmt::format("COPY: {}", conn_error(c_)), "");
+  // In 64 kB messages: the server holds a whole message in memory before it parses it, and a
+  // batch sent as one (megabytes) was allocated and page-faulted afresh by every batch.
+  constexpr std::size_t kChunk = 64 * 1024;
+  for (std::size_t at = 0; at < rows.size(); at += kChunk) {
+    const std::size_t n = std::min(kChunk, rows.size() - at);
+    if (PQputCopyData(c_, rows.data() + at, static_cast<int>(n)) != 1)
+      throw PgError(fmt::format("COPY: {}", conn_error(c_)), "");
+  }
+  if (PQputCopyEnd(c_, nullptr) != 1) throw PgError(fmt::format("COPY: {}", conn_error(c_)), "");
   // The COPY's own result, then the end of the results.
   checked(c_, PQgetResult(c_));
   while (pg_result* more = PQgetResult(c_)) PQclear(more);
