@@ -16,7 +16,7 @@
 
 namespace brakefit::fleet {
 
-inline constexpr int kSchemaVersion = 1;
+inline constexpr int kSchemaVersion = 2;
 
 struct InitOutcome {
   int from_version = 0;

@@ -517,6 +517,36 @@ class Faults(unittest.TestCase):
         self.s.assert_exactly_once(self)
 
 
+class Migrations(unittest.TestCase):
+    def test_init_upgrades_a_version_1_schema_with_its_rows_and_a_second_init_does_nothing(self):
+        # A database of its own, brought to version 1 as it shipped (the result column jsonb, the
+        # second migration not applied) with a row in it: `fleet init` upgrades it in place.
+        SERVER.psql("CREATE DATABASE brakefit_migrate", db="postgres")
+        url = SERVER.admin_url("brakefit_migrate")
+        r = run_cli("fleet", "init", url)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("to 2", r.stdout)
+        SERVER.psql("ALTER TABLE brakefit.events ALTER COLUMN result TYPE jsonb USING result::jsonb;"
+                    "DELETE FROM brakefit.schema_version WHERE version = 2;"
+                    "SELECT brakefit.ensure_month(now());"
+                    "INSERT INTO brakefit.events (station_id, lane_id, event_uid, created_at, "
+                    "store_row_id, source, vehicle_id, bench, end_reason, flags, points, model_hash, "
+                    "calibration_toml, result) VALUES ('north', '1', 'u1', now(), 1, '', '', "
+                    "'roller', 'release', '', 900, 'h', '', '{\"schema\": \"brakefit.event/1\", "
+                    "\"points\": 900}')", db="brakefit_migrate")
+        r = run_cli("fleet", "init", url)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("from version 1 to 2", r.stdout)
+        self.assertEqual(SERVER.psql("SELECT format_type(atttypid, atttypmod) FROM pg_attribute "
+                                     "WHERE attrelid = 'brakefit.events'::regclass AND "
+                                     "attname = 'result'", db="brakefit_migrate"), "json")
+        self.assertEqual(SERVER.psql("SELECT result->>'points' FROM brakefit.events "
+                                     "WHERE event_uid = 'u1'", db="brakefit_migrate"), "900")
+        r = run_cli("fleet", "init", url)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("at version 2 already", r.stdout)
+
+
 class SyncUnit(unittest.TestCase):
     def test_the_sync_unit_verifies_and_is_sandboxed(self):
         if not shutil.which("systemd-analyze"):
