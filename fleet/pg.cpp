@@ -1,10 +1,9 @@
 #include "fleet/pg.hpp"
 
 #include <fmt/format.h>
-
 #include <libpq-fe.h>
-#include <algorithm>
 
+#include <algorithm>
 #include <regex>
 
 namespace brakefit::fleet {

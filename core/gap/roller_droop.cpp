@@ -29,11 +29,17 @@ constexpr double kMaxMissSteps = 0.35;
 /// over the run (more, and its staircase would have shown it).
 constexpr double kMaxSharedDroopSteps = 1.0;
 
+/// The largest force's magnitude: the scale lagged_load's 0-1 is over.
+double largest_force_n(const std::vector<double>& f) {
+  double f_max = 0;
+  for (double x : f) f_max = std::max(f_max, std::abs(x));
+  return f_max;
+}
+
 /// The force behind a first-order lag, over the largest force (0-1).
 std::vector<double> lagged_load(const std::vector<double>& t_s, const std::vector<double>& f,
                                 double tau_s) {
-  double f_max = 0;
-  for (double x : f) f_max = std::max(f_max, std::abs(x));
+  const double f_max = largest_force_n(f);
   std::vector<double> y(f.size(), 0.0);
   if (f.empty() || f_max <= 0) return y;
   double s = f.front() / f_max;
@@ -145,9 +151,7 @@ RollerDroop drooping_roller_speed(const std::vector<double>& t_s, const std::vec
     out.v_ref_mps[i] =
         best(0) + best(1) * load[i] + (cols.trend ? best(2) * u + best(3) * u * u : 0.0);
   }
-  double f_max = 0;
-  for (double f : force_n) f_max = std::max(f_max, std::abs(f));
-  out.mps_per_n = -best(1) / f_max;  // lagged_load is over the run's largest force
+  out.mps_per_n = -best(1) / largest_force_n(force_n);  // lagged_load's scale
   out.lag_s = best_tau;
   return out;
 }
@@ -166,8 +170,7 @@ std::string share_roller_droop(std::vector<Run>& runs) {
   double largest_mps = 0;
   for (Run& r : runs) {
     if (r.bench != can::BenchKind::Roller || !r.roller_held_quantised || r.t_s.size() < 2) continue;
-    double f_max = 0;
-    for (double f : r.force_n) f_max = std::max(f_max, std::abs(f));
+    const double f_max = largest_force_n(r.force_n);
     const auto load = lagged_load(r.t_s, r.force_n, tau_s);
     double mean = 0;
     for (double x : load) mean += x / static_cast<double>(load.size());
