@@ -102,10 +102,13 @@ EffectParam effect_param(Effect e) {
       return {"sigma_m", 1e-4, 2.0, 0.05};
     case Effect::TimeOffset:
       return {"dt_s", -0.3, 0.3, 0.0};
+    // The lower end of these three is the effect absent, where a fit explains nothing and the
+    // gates refuse it; judged as an edge, the range's 0.5 % (0.5 kg m^2 on a range sized for
+    // trucks, 0.15 bar) would refuse a car's wheel and an air brake's threshold.
     case Effect::WheelInertia:
-      return {"inertia_kgm2", 0.0, 100.0, 0.5};  // a truck wheel end: 20-80 kg m^2
+      return {"inertia_kgm2", 0.0, 100.0, 0.5, true};  // a truck wheel end: 20-80 kg m^2
     case Effect::BrakeThreshold:
-      return {"p0_bar", 0.0, 30.0, 1.0};  // a dead zone: the pads bite from p0 on
+      return {"p0_bar", 0.0, 30.0, 1.0, true};  // a dead zone: the pads bite from p0 on
     case Effect::SlipOffset:
       return {"slip_offset_ratio", -0.05, 0.05, 0.0};
     case Effect::LoadTransfer:
@@ -113,7 +116,7 @@ EffectParam effect_param(Effect e) {
     case Effect::LoadTransferMeasured:
       return {"dfz_per_decel_s2_per_m", -0.2, 0.2, 0.0};
     case Effect::SpeedFriction:
-      return {"lambda_mu_v", 0.0, 20.0, 0.1};
+      return {"lambda_mu_v", 0.0, 20.0, 0.1, true};
     case Effect::RollerFriction:
       return {"mu_ratio", 0.3, 2.0, 1.0};
     case Effect::CradleCap:
