@@ -6,7 +6,9 @@
       (generator C imports numpy: Debian's python3-numpy, under /usr/bin/python3)
 
 1. The shipped recordings (data/recorded, each with its .truth.json): for each bench and tyre
-   pressure, `brakefit gap --bench-model` on its three runs writes the bench's measurement model;
+   pressure, `brakefit gap --bench-model` on its three runs writes the bench's measurement model
+   (on the ground with the car declared: --vehicle-mass, --cg-height, --wheelbase from the
+   recording's scenario, so the vehicle's load transfer is undone as well);
    `brakefit replay --bench-model` then fits every run with it. The model comes from the same
    runs ("same") and from the bench's runs at the other tyre pressure ("other": the bench's
    effects measured on runs the event was not among).
@@ -31,6 +33,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import tomllib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 REC = os.path.join(ROOT, "data", "recorded")
@@ -62,9 +65,18 @@ def run(cmd):
     return p.stdout
 
 
-def bench_model(brakefit, files, out):
-    run([brakefit, "gap", "--bench-model", out, *files])
+def bench_model(brakefit, files, out, vehicle=()):
+    run([brakefit, "gap", "--bench-model", out, *vehicle, *files])
     return out
+
+
+def declared_vehicle(log):
+    """A ground recording's vehicle (--vehicle-mass, --cg-height, --wheelbase) from the scenario
+    its .truth.json carries: a researcher testing on the ground knows the car."""
+    scenario = tomllib.loads(json.load(open(log[:-4] + ".truth.json"))["scenario_toml"])
+    g = scenario["ground"]
+    return ("--vehicle-mass", str(g["vehicle_mass_kg"]), "--cg-height", str(g["cg_height_m"]),
+            "--wheelbase", str(g["wheelbase_m"]))
 
 
 def replay(brakefit, files, model):
@@ -97,7 +109,8 @@ def recordings(brakefit, tmp):
         if name.endswith(".log"):
             bench, pressure = name.split("_")[:2]
             groups.setdefault((bench, pressure), []).append(os.path.join(REC, name))
-    models = {k: bench_model(brakefit, v, os.path.join(tmp, f"{k[0]}_{k[1]}.toml"))
+    models = {k: bench_model(brakefit, v, os.path.join(tmp, f"{k[0]}_{k[1]}.toml"),
+                             declared_vehicle(v[0]) if k[0] == "ground" else ())
               for k, v in groups.items()}
     rows = []
     for (bench, pressure), files in groups.items():

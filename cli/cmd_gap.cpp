@@ -231,6 +231,44 @@ condition).</p>
   write_file(dir + "/index.html", html);
 }
 
+/// The vehicle's load transfer declared from its geometry (--vehicle-mass, --cg-height,
+/// --wheelbase), held in place of any the diagnosis measured: the geometry is known exactly, the
+/// diagnosis's magnitude to its standard error.
+void declare_load_transfer(gap::BenchModel& bm, gap::Condition condition,
+                           const std::vector<gap::Run>& runs, double mass_kg, double cg_height_m,
+                           double wheelbase_m, bool front) {
+  if (condition != gap::Condition::Ground)
+    throw ExitError(kExitUsage,
+                    "gap: --cg-height and --wheelbase describe a ground test's vehicle; these runs "
+                    "are from a roller, which has no load transfer");
+  if (!(mass_kg > 0 && cg_height_m > 0 && wheelbase_m > 0))
+    throw ExitError(kExitUsage,
+                    "gap: a declared load transfer needs --vehicle-mass, --cg-height and "
+                    "--wheelbase together");
+  std::vector<double> loads;
+  for (const auto& r : runs)
+    if (r.wheel_load_n > 0) loads.push_back(r.wheel_load_n);
+  if (loads.empty())
+    throw ExitError(kExitDataError,
+                    "gap: the runs carry no wheel load (the bench calibration's wheel_load_n): "
+                    "the declared load transfer cannot be put relative to it");
+  std::sort(loads.begin(), loads.end());
+  const gap::BenchEffect declared = gap::declared_load_transfer(mass_kg, cg_height_m, wheelbase_m,
+                                                                loads[loads.size() / 2], front);
+  auto& effects = bm.effects;
+  for (auto& e : effects)
+    if (e.effect == gap::Effect::LoadTransfer) {
+      spdlog::info(
+          "gap: the declared load transfer (q {:.4g} per m/s^2) replaces the one the "
+          "diagnosis measured ({:.4g})",
+          declared.value, e.value);
+      e = declared;
+      return;
+    }
+  effects.push_back(declared);
+  std::erase(bm.not_held, std::string("load_transfer"));
+}
+
 }  // namespace
 
 void add_gap_command(CLI::App& app) {
@@ -239,9 +277,11 @@ void add_gap_command(CLI::App& app) {
     std::string report, force = "pressure", model, bench_model;
     bool json = false;
     RunOptions run;
-    double gate_gain = NAN, bic_margin = NAN;  ///< NaN: the calibrated gate of the condition
-    double fit_quality_factor = NAN;           ///< NaN: the condition's (1.5)
-    double vehicle_mass_kg = 0.0;              ///< 0: not given
+    double gate_gain = NAN, bic_margin = NAN;     ///< NaN: the calibrated gate of the condition
+    double fit_quality_factor = NAN;              ///< NaN: the condition's (1.5)
+    double vehicle_mass_kg = 0.0;                 ///< 0: not given
+    double cg_height_m = 0.0, wheelbase_m = 0.0;  ///< 0: not given
+    std::string axle = "front";
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand(
@@ -275,6 +315,16 @@ void add_gap_command(CLI::App& app) {
                   "the vehicle's mass in kg: load transfer is also given as the centre of "
                   "gravity's height over the wheelbase (h/L), from the runs' wheel load")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--cg-height", o->cg_height_m,
+                  "with --vehicle-mass and --wheelbase (ground runs, --bench-model): the centre "
+                  "of gravity's height in m; the bench model then holds the vehicle's load "
+                  "transfer as declared, and the tyre's fits are at the wheel's static load")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--wheelbase", o->wheelbase_m, "the vehicle's wheelbase in m (see --cg-height)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--axle", o->axle, "the tested wheel's axle (see --cg-height)")
+      ->check(CLI::IsMember({"front", "rear"}))
+      ->capture_default_str();
   cmd->callback([o] {
     const Model model = load_model(resolve_model_path(o->model));
     o->run.pipeline.fit = false;
@@ -401,6 +451,9 @@ void add_gap_command(CLI::App& app) {
         throw ExitError(kExitUsage,
                         "gap: --bench-model takes the runs of one bench (model vs measurement)");
       gap::BenchModel bm = gap::bench_model_from(rep, condition);
+      if (o->cg_height_m > 0 || o->wheelbase_m > 0)
+        declare_load_transfer(bm, condition, runs, o->vehicle_mass_kg, o->cg_height_m,
+                              o->wheelbase_m, o->axle == "front");
       bm.model_hash = model.hash;
       bm.date = iso8601_utc(static_cast<std::int64_t>(std::time(nullptr)));
       bm.runs = o->files;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 #include "core/gap/internal.hpp"
 #include "core/toml_reader.hpp"
@@ -18,7 +19,7 @@ void sort_effects(BenchModel& m) {
 }
 }  // namespace
 
-bool is_bench_effect(Effect e) {
+bool is_bench_effect(Effect e, Condition c) {
   switch (e) {
     case Effect::RelaxationLength:
     case Effect::TimeOffset:
@@ -26,9 +27,29 @@ bool is_bench_effect(Effect e) {
     case Effect::BrakeThreshold:
     case Effect::SlipOffset:
       return true;
+    case Effect::LoadTransfer:
+      return c == Condition::Ground;
     default:
       return false;
   }
+}
+
+BenchEffect declared_load_transfer(double vehicle_mass_kg, double cg_height_m, double wheelbase_m,
+                                   double wheel_load_n, bool front_axle) {
+  const double dfz_per_fz = (front_axle ? 1.0 : -1.0) * vehicle_mass_kg * cg_height_m /
+                            (2.0 * wheelbase_m * wheel_load_n);
+  BenchEffect b;
+  b.effect = Effect::LoadTransfer;
+  b.value = dfz_per_fz * kPublishedPeakLoadExponent;
+  b.stderr_ = NAN;
+  b.more = {kPublishedKxLoadRatio, 0.0};
+  b.origin = fmt::format(
+      "declared from the vehicle: {:.0f} kg, centre of gravity {:.3f} m high, wheelbase {:.3f} m, "
+      "{} axle, wheel load {:.0f} N: dFz/Fz {:.4g} per m/s^2, D by {:.2f} of it (published tyres' "
+      "d ln D / d ln Fz), the slip stiffness's load ratio the published {:.2f}",
+      vehicle_mass_kg, cg_height_m, wheelbase_m, front_axle ? "front" : "rear", wheel_load_n,
+      dfz_per_fz, kPublishedPeakLoadExponent, kPublishedKxLoadRatio);
+  return b;
 }
 
 BenchModel bench_model_from(const Report& rep, Condition c) {
@@ -39,7 +60,7 @@ BenchModel bench_model_from(const Report& rep, Condition c) {
     const std::size_t first = at;
     at += effect_params(e).size();
     if (is_nuisance(e)) continue;
-    if (!is_bench_effect(e)) {
+    if (!is_bench_effect(e, c)) {
       m.not_held.emplace_back(to_string(e));
       continue;
     }
@@ -47,6 +68,7 @@ BenchModel bench_model_from(const Report& rep, Condition c) {
     b.effect = e;
     b.value = rep.after.params.at(first);
     b.stderr_ = first < rep.after.stderr_.size() ? rep.after.stderr_[first] : NAN;
+    for (std::size_t j = first + 1; j < at; ++j) b.more.push_back(rep.after.params.at(j));
     m.effects.push_back(b);
   }
   return m;
@@ -66,10 +88,14 @@ std::string format_bench_model(const BenchModel& in) {
     out += fmt::format("{}\"{}\"", i ? ", " : "", m.not_held[i]);
   out += "]\n";
   for (const auto& e : m.effects) {
-    const EffectParam p = effect_param(e.effect);
-    out += fmt::format("\n[effects.{}]\n{} = {:.9g}\n", to_string(e.effect), p.name, e.value);
-    out += std::isfinite(e.stderr_) ? fmt::format("{}_stderr = {:.3g}\n", p.name, e.stderr_)
+    const auto ps = effect_params(e.effect);
+    out += "\n";
+    if (!e.origin.empty()) out += fmt::format("# {}\n", e.origin);
+    out += fmt::format("[effects.{}]\n{} = {:.9g}\n", to_string(e.effect), ps[0].name, e.value);
+    out += std::isfinite(e.stderr_) ? fmt::format("{}_stderr = {:.3g}\n", ps[0].name, e.stderr_)
                                     : "# standard error not known (the fit's covariance was not)\n";
+    for (std::size_t j = 0; j < e.more.size() && j + 1 < ps.size(); ++j)
+      out += fmt::format("{} = {:.9g}\n", ps[j + 1].name, e.more[j]);
   }
   return out;
 }
@@ -94,7 +120,7 @@ BenchModel parse_bench_model(std::string_view text, const std::string& source) {
     Effect e{};
     bool found = false;
     for (Effect cand : {Effect::RelaxationLength, Effect::TimeOffset, Effect::WheelInertia,
-                        Effect::BrakeThreshold, Effect::SlipOffset})
+                        Effect::BrakeThreshold, Effect::SlipOffset, Effect::LoadTransfer})
       if (name.str() == to_string(cand)) {
         e = cand;
         found = true;
@@ -102,17 +128,26 @@ BenchModel parse_bench_model(std::string_view text, const std::string& source) {
     if (!found || !node.is_table())
       rd.fail(key,
               "not an effect a bench model holds (relaxation_length, time_offset, "
-              "wheel_inertia, brake_threshold, slip_offset)");
+              "wheel_inertia, brake_threshold, slip_offset, and on the ground load_transfer)");
+    if (e == Effect::LoadTransfer && m.condition != "ground")
+      rd.fail(key,
+              "load transfer is the vehicle's pitch on the ground; this model's condition is " +
+                  m.condition);
     const auto& et = *node.as_table();
-    const EffectParam p = effect_param(e);
-    const std::string param = p.name, err = param + "_stderr";
+    const auto ps = effect_params(e);
+    const std::string param = ps[0].name, err = param + "_stderr";
     const std::string prefix = key + ".";
-    rd.check_keys(et, prefix, {param, err});
+    std::set<std::string> keys{param, err};
+    for (std::size_t j = 1; j < ps.size(); ++j) keys.emplace(ps[j].name);
+    rd.check_keys(et, prefix, keys);
     if (!et.contains(param)) rd.fail(fmt::format("{}{}", prefix, param), "missing");
     BenchEffect b;
     b.effect = e;
-    b.value = rd.number(et, prefix, p.name, 0.0, p.lo, p.hi);
+    b.value = rd.number(et, prefix, ps[0].name, 0.0, ps[0].lo, ps[0].hi);
     b.stderr_ = rd.number(et, prefix, err.c_str(), NAN, 0.0, 1e9);
+    if (e == Effect::LoadTransfer)  // optional: the published ratio, no lag
+      b.more = {rd.number(et, prefix, ps[1].name, kPublishedKxLoadRatio, ps[1].lo, ps[1].hi),
+                rd.number(et, prefix, ps[2].name, 0.0, ps[2].lo, ps[2].hi)};
     m.effects.push_back(b);
   }
   sort_effects(m);
@@ -122,7 +157,15 @@ BenchModel parse_bench_model(std::string_view text, const std::string& source) {
 TyrePoints tyre_points(const Run& r, const BenchModel& m) {
   const std::size_t n = r.t_s.size();
   double sigma_m = 0, dt_s = 0, inertia = 0, p0_bar = 0, offset = 0;
+  double load_q = 0, load_ratio = kPublishedKxLoadRatio, pitch_lag_s = 0;
   for (const auto& e : m.effects) {
+    if (e.effect == Effect::LoadTransfer) {
+      load_q = e.value;
+      if (e.more.size() >= 2) {
+        load_ratio = e.more[0];
+        pitch_lag_s = e.more[1];
+      }
+    }
     if (e.effect == Effect::RelaxationLength) sigma_m = e.value;
     if (e.effect == Effect::TimeOffset) dt_s = e.value;
     if (e.effect == Effect::WheelInertia) inertia = e.value;
@@ -139,6 +182,19 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
   const double r2 = r.wheel_radius_m * r.wheel_radius_m;
   const double filter_gain_n_s =
       r.pressure_rate_bar_per_s.size() == n ? r.pressure_filter_s * r.brake_gain_n_per_bar : 0.0;
+  // The load through the body's pitch, as predict() has it (a first-order lag).
+  std::vector<double> load(n, 1.0);
+  if (load_q != 0 && r.ref_decel_mps2.size() == n) {
+    double decel = r.ref_decel_mps2.front();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i > 0 && pitch_lag_s > 1e-6) {
+        const double h = r.t_s[i] - r.t_s[i - 1];
+        decel += (r.ref_decel_mps2[i] - decel) * h / (pitch_lag_s + h);
+      } else
+        decel = r.ref_decel_mps2[i];
+      load[i] = std::max(0.05, 1.0 + load_q * decel);
+    }
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const double at = r.t_s[i] - dt_s;
     if (at > r.t_s.back()) {
@@ -154,10 +210,11 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
     // pressure leads the channel by tau times its rate, and a fast ground ramp is tens of bar/s
     // per 10 ms.
     const double line_n = r.force_n[i] + filter_gain_n_s * r.pressure_rate_bar_per_s[i];
-    out.curve.slip_ratio.push_back(s);
+    out.curve.slip_ratio.push_back(s * std::pow(load[i], load_ratio - 1.0));
     // Below the threshold the pads give no torque: the channel reads up to p0 while the tyre
     // carries only the wheel's inertial force (predict's min(threshold, force), undone).
-    out.curve.force_n.push_back(line_n + inertia * accel / r2 - std::min(threshold_n, line_n));
+    out.curve.force_n.push_back((line_n + inertia * accel / r2 - std::min(threshold_n, line_n)) /
+                                load[i]);
   }
   if (r.runaway)
     out.left_out.emplace_back(

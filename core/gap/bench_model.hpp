@@ -18,6 +18,10 @@ struct BenchEffect {
   Effect effect{};
   double value = 0.0;    ///< in the effect's parameter unit (effect_param(effect).name)
   double stderr_ = 0.0;  ///< its standard error from the diagnosis's fit (0: not known)
+  /// The effect's further parameters, in effect_params' order: load transfer's kx_load_ratio and
+  /// pitch_lag_s (empty: none, or their defaults, the published tyres' ratio and no lag).
+  std::vector<double> more;
+  std::string origin;  ///< where the values come from, written as a comment (empty: the diagnosis)
 };
 
 struct BenchModel {
@@ -31,21 +35,30 @@ struct BenchModel {
 };
 
 /// The effects a bench model undoes: lags (relaxation, time offset), the wheel's inertia, the
-/// brake's threshold and a slip offset.
-bool is_bench_effect(Effect e);
-/// The bench model of a diagnosis: its named effects that are the instrument's, at the final
-/// fit's values and standard errors.
+/// brake's threshold and a slip offset; on the ground also the vehicle's load transfer (what is
+/// published is the tyre at the wheel's static load).
+bool is_bench_effect(Effect e, Condition c);
+/// The bench model of a diagnosis: its named effects that it undoes, at the final fit's values and
+/// standard errors.
 BenchModel bench_model_from(const Report& rep, Condition c);
+
+/// The vehicle's load transfer onto a wheel, declared from its geometry: the wheel's load grows
+/// (front axle) or falls (rear) by m h / (2 L) per m/s^2 of deceleration, shared by the axle's two
+/// wheels; held as the diagnosis's law (D by 1 + q a, q = dFz/Fz per m/s^2 through the published
+/// tyres' d ln D / d ln Fz; the slip stiffness by the published ratio; no pitch lag).
+BenchEffect declared_load_transfer(double vehicle_mass_kg, double cg_height_m, double wheelbase_m,
+                                   double wheel_load_n, bool front_axle);
 /// TOML text: a header comment (model hash, runs, date), schema/version, condition, and one
 /// [effects.NAME] table per effect with its parameter and PARAM_stderr.
 std::string format_bench_model(const BenchModel& m);
 /// Throws InputError "SOURCE: key 'effects.x.y': ..." on unknown effects or keys, bad values.
 BenchModel parse_bench_model(std::string_view text, const std::string& source);
 
-/// A run's points with the bench's effects undone. Points that cannot be the tyre's are left out,
-/// each kind counted with its reason (the force channel's lead past the run's end). The run
-/// itself ends at the lock-up runaway or a locked wheel (condition): past there the force is the
-/// brake holding the rim, not the tyre's.
+/// A run's points with the bench's effects undone (a load transfer: each point moved to the
+/// wheel's static load, force over 1 + q a, slip times (1 + q a)^(ratio - 1)). Points that cannot
+/// be the tyre's are left out, each kind counted with its reason (the force channel's lead past the
+/// run's end). The run itself ends at the lock-up runaway or a locked wheel (condition): past there
+/// the force is the brake holding the rim, not the tyre's.
 struct TyrePoints {
   Curve curve;
   /// Reason and points (0: a stretch the conditioning already cut, such as the runaway).

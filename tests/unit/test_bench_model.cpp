@@ -40,7 +40,7 @@ gap::BenchModel model_of(const std::vector<gap::Effect>& effects,
   gap::BenchModel m;
   m.condition = "roller";
   for (std::size_t i = 0; i < effects.size(); ++i)
-    m.effects.push_back({effects[i], values[i], NAN});
+    m.effects.push_back({effects[i], values[i], NAN, {}, {}});
   return m;
 }
 
@@ -136,6 +136,75 @@ TEST(BenchModel, TheRelaxationLagIsUndone) {
   EXPECT_LT(worst, 0.005 * tyre.D);
 }
 
+TEST(BenchModel, ALoadTransferIsWrittenWithItsRatioAndLagAndRefusedOnARoller) {
+  gap::BenchModel m = model_of({gap::Effect::LoadTransfer}, {0.0337});
+  m.condition = "ground";
+  m.effects[0].more = {1.4, 0.08};
+  m.effects[0].origin = "declared from the vehicle";
+  const std::string text = gap::format_bench_model(m);
+  EXPECT_NE(text.find("# declared from the vehicle\n[effects.load_transfer]"), std::string::npos)
+      << text;
+  const gap::BenchModel back = gap::parse_bench_model(text, "m.toml");
+  ASSERT_EQ(back.effects.size(), 1u);
+  EXPECT_DOUBLE_EQ(back.effects[0].value, 0.0337);
+  EXPECT_EQ(back.effects[0].more, (std::vector<double>{1.4, 0.08}));
+  // Written by hand without its ratio and lag: the published ratio, no lag.
+  const gap::BenchModel bare = gap::parse_bench_model(
+      "schema = \"brakefit.bench_model\"\nversion = 1\ncondition = \"ground\"\n"
+      "[effects.load_transfer]\ndfz_per_decel_s2_per_m = 0.03\n",
+      "m.toml");
+  ASSERT_EQ(bare.effects.size(), 1u);
+  EXPECT_EQ(bare.effects[0].more, (std::vector<double>{1.25, 0.0}));
+  std::string roller = text;
+  roller.replace(roller.find("\"ground\""), 8, "\"roller\"");
+  try {
+    gap::parse_bench_model(roller, "m.toml");
+    ADD_FAILURE() << "a roller model with a load transfer was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'effects.load_transfer'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(BenchModel, TheDeclaredLoadTransferFollowsTheVehiclesGeometry) {
+  // m h / (2 L Fz) of the wheel's load per m/s^2: 1300 kg, 0.55 m, 2.6 m, 3800 N -> 0.0362.
+  const gap::BenchEffect front = gap::declared_load_transfer(1300, 0.55, 2.6, 3800, true);
+  const gap::BenchEffect rear = gap::declared_load_transfer(1300, 0.55, 2.6, 3800, false);
+  EXPECT_EQ(front.effect, gap::Effect::LoadTransfer);
+  EXPECT_NEAR(front.value, 0.93 * 1300 * 0.55 / (2 * 2.6 * 3800), 1e-9);
+  EXPECT_DOUBLE_EQ(rear.value, -front.value);  // the rear wheels unload
+  EXPECT_EQ(front.more, (std::vector<double>{1.25, 0.0}));
+  EXPECT_NE(front.origin.find("1300 kg"), std::string::npos);
+}
+
+TEST(BenchModel, AGroundWheelsLoadTransferIsUndoneToItsStaticLoad) {
+  // A braking car: the deceleration rises with the force, the front wheel's load with it through
+  // a pitch lag. predict() makes the force at the moving load; undone, the points lie on the
+  // tyre's curve at the static load.
+  const MfParams tyre{15.0, 1.58, 3400.0, 0.1, 0, 0};
+  gap::Run r = synthetic_run();
+  r.bench = can::BenchKind::Ground;
+  for (std::size_t i = 0; i < r.t_s.size(); ++i) {
+    r.v_ref_mps[i] = 11.0 - 4.0 * r.t_s[i];
+    r.ref_decel_mps2[i] = 9.0 * std::min(1.0, r.t_s[i] / 0.8);
+  }
+  const std::vector<gap::Effect> effects{gap::Effect::LoadTransfer};
+  const std::vector<double> lt{0.034, 1.3, 0.06};
+  r.initial_force_n = 0.0;
+  r.force_n = gap::predict(r, {tyre.B, tyre.C, tyre.D, tyre.E, lt[0], lt[1], lt[2]}, effects);
+  gap::BenchModel m = model_of(effects, {lt[0]});
+  m.condition = "ground";
+  m.effects[0].more = {lt[1], lt[2]};
+  const gap::TyrePoints pts = gap::tyre_points(r, m);
+  double worst = 0, raw_worst = 0;
+  for (std::size_t i = 0; i < pts.curve.size(); ++i) {
+    worst =
+        std::max(worst, std::abs(pts.curve.force_n[i] - mf_force_n(tyre, pts.curve.slip_ratio[i])));
+    raw_worst = std::max(raw_worst, std::abs(r.force_n[i] - mf_force_n(tyre, r.slip[i])));
+  }
+  EXPECT_LT(worst, 0.005 * tyre.D) << "raw points were " << raw_worst << " N off";
+  EXPECT_GT(raw_worst, 0.2 * tyre.D);  // a third more load at 9 m/s^2
+}
+
 TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   gap::Report rep;
   rep.accepted = {gap::Effect::TyreShift, gap::Effect::RelaxationLength, gap::Effect::LoadTransfer,
@@ -143,8 +212,9 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   // B C D E, tyre shift, sigma, load transfer (q, ratio, pitch lag), inertia
   rep.after.params = {15, 1.5, 3400, 0.1, 1e-4, 0.2, 0.03, 1.2, 0.1, 0.9};
   rep.after.stderr_ = {0, 0, 0, 0, 0, 0.01, 0, 0, 0, 0.05};
-  const gap::BenchModel m = gap::bench_model_from(rep, gap::Condition::Ground);
-  EXPECT_EQ(m.condition, "ground");
+  // On a roller a load transfer is not the instrument's and stays in the curve, said so.
+  const gap::BenchModel m = gap::bench_model_from(rep, gap::Condition::Roller);
+  EXPECT_EQ(m.condition, "roller");
   ASSERT_EQ(m.effects.size(), 2u);
   EXPECT_EQ(m.effects[0].effect, gap::Effect::RelaxationLength);
   EXPECT_DOUBLE_EQ(m.effects[0].value, 0.2);
@@ -152,6 +222,13 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   EXPECT_EQ(m.effects[1].effect, gap::Effect::WheelInertia);
   EXPECT_DOUBLE_EQ(m.effects[1].value, 0.9);
   EXPECT_EQ(m.not_held, std::vector<std::string>{"load_transfer"});
+  // On the ground it is the vehicle's, undone with its ratio and lag: the tyre at its static load.
+  const gap::BenchModel g = gap::bench_model_from(rep, gap::Condition::Ground);
+  ASSERT_EQ(g.effects.size(), 3u);
+  EXPECT_EQ(g.effects[1].effect, gap::Effect::LoadTransfer);
+  EXPECT_DOUBLE_EQ(g.effects[1].value, 0.03);
+  EXPECT_EQ(g.effects[1].more, (std::vector<double>{1.2, 0.1}));
+  EXPECT_TRUE(g.not_held.empty());
 }
 
 TEST(BenchModel, ADeclaredPressureFilterIsUndone) {
