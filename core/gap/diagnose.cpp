@@ -8,6 +8,7 @@
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
+#include "core/gap/warm_fit.hpp"
 
 namespace brakefit::gap {
 
@@ -153,15 +154,15 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   rep.noise_n = rep.floor.total_n();
   const MfParams base{
       rep.before.params[0], rep.before.params[1], rep.before.params[2], rep.before.params[3], 0, 0};
-  // Two starts for every fit: the baseline (B, C, D, E that absorbed the effect, often the
+  // Two starts for every fit (three where the model less its last effect was fitted to the same
+  // runs: warm_fit.hpp): the baseline (B, C, D, E that absorbed the effect, often the
   // nearest) and a neutral curve from the data (its peak and initial slope, C 1.65, E 0), which
   // the baseline's distortion cannot trap: wheel inertia on the ground pulled the baseline to
   // E 0.92, from where the fit with the effect stopped in a local minimum at 2x the noise.
   const MfParams neutral = neutral_start(runs);
+  WarmFitter warm(base, neutral);
   const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
-    Fit a = fit_runs(train, e, base);
-    Fit b = fit_runs(train, e, neutral);
-    return b.ssr < a.ssr ? b : a;
+    return warm(train, e);
   };
   rep.gap_before_rmse_n = heldout(runs, rep.baseline_effects, fit);
   rep.where = where_rows(runs, rep.before.params, rep.baseline_effects);

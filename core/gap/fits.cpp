@@ -6,6 +6,7 @@
 #include "core/fit/lm.hpp"
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
+#include "core/gap/warm_fit.hpp"
 
 namespace brakefit::gap {
 
@@ -113,6 +114,11 @@ std::vector<Effect> without_tyre_shift(const std::vector<Effect>& model,
 
 Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
              const MfParams& start) {
+  return fit_runs_from(runs, effects, {start.B, start.C, start.D, start.E});
+}
+
+Fit fit_runs_from(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
+                  const std::vector<double>& x0_head) {
   const auto np = static_cast<Eigen::Index>(param_count(effects));
   double peak = 0;
   for (const Run* r : runs)
@@ -120,7 +126,6 @@ Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& eff
   Eigen::VectorXd lo(np), hi(np), x0(np);
   lo.head(4) << 0.1, 0.3, 0.0, -20.0;
   hi.head(4) << 200.0, 3.0, 5.0 * peak, 1.0;
-  x0.head(4) << start.B, start.C, start.D, start.E;
   Eigen::Index i = 4;
   for (Effect e : effects)
     for (const EffectParam& ep : effect_params(e)) {
@@ -129,6 +134,9 @@ Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& eff
       hi(i) = r.hi;
       x0(i++) = r.start;
     }
+  // The given head (a curve, or a fit of the model's first effects), inside this model's ranges.
+  for (Eigen::Index k = 0; k < std::min<Eigen::Index>(np, std::ssize(x0_head)); ++k)
+    x0(k) = std::clamp(x0_head[static_cast<std::size_t>(k)], lo(k), hi(k));
   GapProblem problem(runs, effects);
   fit::LmOptions lm;
   lm.max_iterations = 100;
