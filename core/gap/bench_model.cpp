@@ -17,6 +17,29 @@ void sort_effects(BenchModel& m) {
   std::stable_sort(m.effects.begin(), m.effects.end(),
                    [](const BenchEffect& a, const BenchEffect& b) { return a.effect < b.effect; });
 }
+/// A named load transfer is held at its measured magnitude (the stiffness's load ratio at the
+/// published tyres'), not at the free fit's: the free ratio can end far from any tyre's (0.38 on
+/// a ground set whose only effect was the wheel's inertia, where undoing the free fit's q put the
+/// tyre 30 % off), while q at the published ratio is what the report gives as the magnitude.
+void hold_measured_load_transfer(const Report& rep, BenchEffect& b) {
+  for (const auto& sc : rep.effects) {
+    if (sc.effect != Effect::LoadTransfer || !sc.accepted) continue;
+    double q = NAN, lag_s = 0.0;
+    for (const auto& [name, v] : sc.params) {
+      if (name == "dfz_per_decel_s2_per_m") q = v;
+      if (name == "pitch_lag_s") lag_s = v;
+    }
+    if (!std::isfinite(q)) return;
+    b.value = q;
+    b.stderr_ = NAN;  // the free fit's covariance is not this magnitude's
+    b.more = {kPublishedKxLoadRatio, lag_s};
+    b.origin =
+        "measured by the diagnosis, the slip stiffness's load ratio held at the published "
+        "tyres'";
+    return;
+  }
+}
+
 }  // namespace
 
 bool is_bench_effect(Effect e, Condition c) {
@@ -69,6 +92,7 @@ BenchModel bench_model_from(const Report& rep, Condition c) {
     b.value = rep.after.params.at(first);
     b.stderr_ = first < rep.after.stderr_.size() ? rep.after.stderr_[first] : NAN;
     for (std::size_t j = first + 1; j < at; ++j) b.more.push_back(rep.after.params.at(j));
+    if (e == Effect::LoadTransfer) hold_measured_load_transfer(rep, b);
     m.effects.push_back(b);
   }
   return m;

@@ -229,6 +229,20 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   EXPECT_DOUBLE_EQ(g.effects[1].value, 0.03);
   EXPECT_EQ(g.effects[1].more, (std::vector<double>{1.2, 0.1}));
   EXPECT_TRUE(g.not_held.empty());
+  // Where the report measured it (the stiffness ratio held at the published tyres'), that
+  // magnitude is held, not the free fit's.
+  gap::EffectScore lt;
+  lt.effect = gap::Effect::LoadTransfer;
+  lt.accepted = true;
+  lt.params = {{"dfz_per_decel_s2_per_m", 0.006},
+               {"kx_load_ratio", 0.38},
+               {"pitch_lag_s", 0.02},
+               {"dfz_per_decel_free_ratio_s2_per_m", 0.03}};
+  rep.effects = {lt};
+  const gap::BenchModel measured = gap::bench_model_from(rep, gap::Condition::Ground);
+  ASSERT_EQ(measured.effects.size(), 3u);
+  EXPECT_DOUBLE_EQ(measured.effects[1].value, 0.006);
+  EXPECT_EQ(measured.effects[1].more, (std::vector<double>{1.25, 0.02}));
 }
 
 TEST(BenchModel, ADeclaredPressureFilterIsUndone) {
