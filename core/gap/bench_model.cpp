@@ -24,10 +24,11 @@ void sort_effects(BenchModel& m) {
 void hold_measured_load_transfer(const Report& rep, BenchEffect& b) {
   for (const auto& sc : rep.effects) {
     if (sc.effect != Effect::LoadTransfer || !sc.accepted) continue;
+    const auto ps = effect_params(Effect::LoadTransfer);  // magnitude, ratio, pitch lag
     double q = NAN, lag_s = 0.0;
     for (const auto& [name, v] : sc.params) {
-      if (name == "dfz_per_decel_s2_per_m") q = v;
-      if (name == "pitch_lag_s") lag_s = v;
+      if (name == ps[0].name) q = v;
+      if (name == ps[2].name) lag_s = v;
     }
     if (!std::isfinite(q)) return;
     b.value = q;
@@ -206,18 +207,11 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
   const double r2 = r.wheel_radius_m * r.wheel_radius_m;
   const double filter_gain_n_s =
       r.pressure_rate_bar_per_s.size() == n ? r.pressure_filter_s * r.brake_gain_n_per_bar : 0.0;
-  // The load through the body's pitch, as predict() has it (a first-order lag).
+  // The wheel's load relative to its static one, as predict() has it.
   std::vector<double> load(n, 1.0);
-  if (load_q != 0 && r.ref_decel_mps2.size() == n) {
-    double decel = r.ref_decel_mps2.front();
-    for (std::size_t i = 0; i < n; ++i) {
-      if (i > 0 && pitch_lag_s > 1e-6) {
-        const double h = r.t_s[i] - r.t_s[i - 1];
-        decel += (r.ref_decel_mps2[i] - decel) * h / (pitch_lag_s + h);
-      } else
-        decel = r.ref_decel_mps2[i];
-      load[i] = std::max(0.05, 1.0 + load_q * decel);
-    }
+  if (load_q != 0) {
+    const std::vector<double> decel = pitch_lagged_decel(r, pitch_lag_s);
+    for (std::size_t i = 0; i < n; ++i) load[i] = std::max(0.05, 1.0 + load_q * decel[i]);
   }
   for (std::size_t i = 0; i < n; ++i) {
     const double at = r.t_s[i] - dt_s;

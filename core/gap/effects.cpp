@@ -129,6 +129,22 @@ EffectParam effect_param(Effect e) {
   return {"?", 0, 0, 0};
 }
 
+std::vector<double> pitch_lagged_decel(const Run& r, double lag_s) {
+  const std::size_t n = r.t_s.size();
+  std::vector<double> out(n, 0.0);
+  if (r.ref_decel_mps2.size() != n) return out;
+  double decel = n ? r.ref_decel_mps2[0] : 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i > 0 && lag_s > 1e-6) {  // implicit Euler: no exp per sample
+      const double dt = r.t_s[i] - r.t_s[i - 1];
+      decel += (r.ref_decel_mps2[i] - decel) * dt / (lag_s + dt);
+    } else
+      decel = r.ref_decel_mps2[i];
+    out[i] = decel;
+  }
+  return out;
+}
+
 /// sigma dk'/dx = k - k' along the rolled distance x, solved exactly for slip linear between
 /// samples (the runs are decimated: an Euler step of 10-25 ms against a time constant sigma/V of
 /// 40-300 ms would misplace the lag). y0: the transient slip at the first sample.
@@ -219,16 +235,10 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
         const double ratio =
             effect == Effect::LoadTransferMeasured ? kPublishedKxLoadRatio : p[first + 1];
         const double e_slope = effect == Effect::LoadTransferShape ? p[first + 2] : 0.0;
-        const double lag_s = p[first + effect_params(effect).size() - 1];
-        // The load follows the deceleration through the body's pitch: a first-order lag.
-        double decel = r.ref_decel_mps2.empty() ? 0.0 : r.ref_decel_mps2[0];
+        const std::vector<double> decel =
+            pitch_lagged_decel(r, p[first + effect_params(effect).size() - 1]);
         for (std::size_t i = 0; i < n; ++i) {
-          if (i > 0 && lag_s > 1e-6) {  // implicit Euler: stable at any step, no exp per sample
-            const double dt = r.t_s[i] - r.t_s[i - 1];
-            decel += (r.ref_decel_mps2[i] - decel) * dt / (lag_s + dt);
-          } else
-            decel = r.ref_decel_mps2[i];
-          const double load = std::max(0.05, 1.0 + q * decel);
+          const double load = std::max(0.05, 1.0 + q * decel[i]);
           d_scale[i] *= load;
           b_scale[i] *= std::pow(load, ratio - 1.0);
           e_add[i] += e_slope * (load - 1.0);
