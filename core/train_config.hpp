@@ -22,7 +22,7 @@ struct TrainConfig {
   SomInput som_input = SomInput::Shape;
   mlp::TrainSettings mlp;
   double mlp_truncate_fraction = 0.5;    ///< share of MLP training curves cut short (roller tests)
-  double mlp_truncate_min_ratio = 0.15;  ///< cut slip range for those curves
+  double mlp_truncate_min_ratio = 0.08;  ///< cut slip range for those curves
   double mlp_truncate_max_ratio = 0.6;
 };
 

@@ -90,9 +90,14 @@ class FirstRun(unittest.TestCase):
         self.assertIn("0.3000 (at bound)", r.stdout)
         self.assertIn("road (3 runs): NOT A TYRE'S CURVE: shape factor C 0.3", r.stdout)
         self.assertIn("roller (3 runs): 3 events", r.stdout)
-        # A roller recording whose fits are a tyre's carries no such flag.
-        r = run("replay", "--json", os.path.join(REC, "roller_2p2bar_medium.log"))
-        res = json.loads(r.stdout.splitlines()[0])["results"]
+        # A roller recording fitted on the tyre's basis (its bench's model undone) is a tyre's
+        # curve for every method: no such flag.
+        r = run("replay", "--json", "--bench-model",
+                os.path.join(ROOT, "data", "bench_models", "roller.bench.toml"),
+                os.path.join(REC, "roller_2p2bar_medium.log"))
+        self.assertEqual(r.returncode, 0, r.stderr)
+        res = json.loads(r.stdout.splitlines()[0])["tyre_results"]
+        self.assertEqual([x["method"] for x in res], ["som", "mlp", "lm", "hybrid"])
         self.assertEqual([x["implausible"] for x in res], [[], [], [], []])
 
     def test_the_roller_vs_road_report_names_both_sides_runs(self):

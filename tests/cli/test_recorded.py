@@ -248,13 +248,19 @@ class FitsAtABound(unittest.TestCase):
     """A parameter the bound set, not the data, is named; "peak beyond the data" only when so."""
 
     def test_bounds_are_named_with_the_reason_for_a_null_standard_error(self):
-        for log, param in (("roller_1p0bar_medium", "E"), ("ground_1p0bar_150barps", "C")):
+        # The instrument's raw force on these runs is no tyre's curve: the fit ends on a bound
+        # of C or E (which one depends on the start the hybrid keeps).
+        for log in ("roller_1p0bar_medium", "ground_1p0bar_150barps"):
             r = run("replay", "--json", "--method", "hybrid", os.path.join(REC, log + ".log"))
             self.assertEqual(r.returncode, 0, r.stderr)
             res = json.loads(r.stdout.splitlines()[0])["results"][0]
-            self.assertEqual(res["at_bound"], [param], log)
+            self.assertEqual(len(res["at_bound"]), 1, log)
+            param = res["at_bound"][0]
+            self.assertIn(param, ("C", "E"), log)
             self.assertIsNone(res["stderr"][param])
             self.assertIn("bound", res["stderr_null_reason"][param])
+            for other in set("BCDE") - {param}:
+                self.assertIsNotNone(res["stderr"][other], (log, other))
             self.assertFalse(res["peak_beyond_data"], log)
             table = run("replay", "--method", "hybrid", os.path.join(REC, log + ".log")).stdout
             self.assertIn(f"({param} at bound", table)
