@@ -115,6 +115,29 @@ std::vector<std::string> mlp_outside_training(const Model& m, const Curve& c) {
                   100.0 * ends, 100.0 * shortest)};
 }
 
+std::vector<std::string> mlp_estimate_outside_training(const Model& m, const MfParams& p) {
+  const auto& families = m.config.database.families;
+  if (families.empty()) return {};
+  std::vector<std::string> out;
+  auto check = [&](const char* name, double v, ParamRange TyreFamily::*range) {
+    ParamRange all = families.front().*range;
+    for (const auto& f : families) {
+      all.lo = std::min(all.lo, (f.*range).lo);
+      all.hi = std::max(all.hi, (f.*range).hi);
+    }
+    const double margin = kMlpOutputMargin * (all.hi - all.lo);
+    if (v >= all.lo - margin && v <= all.hi + margin) return;
+    out.push_back(fmt::format(
+        "MLP extrapolating: its {} {:.3g} lies outside the {} of every curve it was trained on "
+        "({:.3g} to {:.3g})",
+        name, v, name, all.lo, all.hi));
+  };
+  check("B", p.B, &TyreFamily::B);
+  check("C", p.C, &TyreFamily::C);
+  check("E", p.E, &TyreFamily::E);
+  return out;
+}
+
 MfParams identify_mlp(const Model& m, const Curve& c) {
   const GridCurve g = resample_to_grid(c, m.grid);
   const Eigen::MatrixXd x = m.mlp_in.apply(mlp_features(g, m.grid));
@@ -154,6 +177,8 @@ MethodResult run_method(Method method, const Model* model, const Curve& c,
     case Method::Mlp:
       r.params = identify_mlp(*model, c);
       r.implausible = mlp_outside_training(*model, c);
+      for (std::string& why : mlp_estimate_outside_training(*model, r.params))
+        r.implausible.push_back(std::move(why));
       break;
     case Method::Lm: {
       const fit::MfFitResult f = fit::fit_mf(c, fit::classic_start(c), options);

@@ -76,6 +76,16 @@ void flag_implausible(MethodResult& r, double wheel_load_n);
 /// the model's truncate range allows). Such an estimate is flagged with the implausible ones.
 std::vector<std::string> mlp_outside_training(const Model& m, const Curve& c);
 
+/// Why the MLP's estimate itself lies outside what it was trained on (empty when it does not): a
+/// B, C or E past the range the training database's families span, by more than
+/// kMlpOutputMargin of that range's width.
+std::vector<std::string> mlp_estimate_outside_training(const Model& m, const MfParams& p);
+/// The network's targets span the families' ranges; past them it guesses. On generator C's
+/// ground runs (curves unlike its training) such estimates were 21x the least-squares fit's RMS
+/// error (median), those inside 1.2x; a tenth of the width leaves the rounding of a good estimate
+/// at a range's edge alone.
+inline constexpr double kMlpOutputMargin = 0.1;
+
 /// Peak-normalised shape on the grid (divided by max |value| over the valid points).
 std::vector<double> normalise_shape(const GridCurve& g);
 /// MLP input features: the normalised shape (0 where masked) and the last valid slip.
