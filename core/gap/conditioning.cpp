@@ -113,6 +113,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   while (rest > 0 && e.lead_in[rest - 1].pressure_bar > kRestPressureBar) --rest;
   for (std::size_t i = rest > 0 ? rest - 1 : e.lead_in.size(); i < e.lead_in.size(); ++i)
     take(e.lead_in[i]);
+  measure_rest_slip(full, std::span(e.lead_in).first(rest), kRestPressureBar);
   for (const auto& s : e.samples) take(s);
   // The lock-up runaway: past the peak a wheel can lose speed within one or two frames. There the
   // slip is measured across a single frame and the force is dominated by the wheel's deceleration
@@ -360,6 +361,9 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.v_wheel_step_mps = full.v_wheel_step_mps;
   r.force_step_n = full.force_step_n;
   r.ref_bias_bound = full.ref_bias_bound;
+  r.rest_slip_mean = full.rest_slip_mean;
+  r.rest_slip_sd = full.rest_slip_sd;
+  r.rest_slip_points = full.rest_slip_points;
   r.initial_slip_rate_per_s = full.initial_slip_rate_per_s;
   r.initial_force_n = full.initial_force_n;
   r.runaway = full.runaway;

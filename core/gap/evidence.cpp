@@ -1,7 +1,8 @@
 // The evidence only one effect leaves, checked before a candidate that passed the gates is
 // named: a fitted force cap must cut the curve while it still rises, a brake threshold must hold
 // the wheel at its free-rolling slip while the pressure rises to it. A curve that is not a Magic
-// Formula (a flat top, a steep foot) is fitted as well by either, and shows neither.
+// Formula (a flat top, a steep foot) is fitted as well by either, and shows neither. A slip offset
+// must read as itself while the wheel rolls free before the brake.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -37,7 +38,65 @@ double dead_zone_slip_ratio(const std::vector<Run>& runs, double p0_bar, double 
   return points >= kMinPoints && expected > 0 ? excess / expected : NAN;
 }
 
+/// The runs' slip at rest pooled: its mean, and its uncertainty: three standard errors and the
+/// largest bias a quantised channel leaves (a speed held on one level is off by up to half a
+/// step, which the rest does not average out; a held reference's own bound), points.
+struct RestSlip {
+  double mean = 0, uncertainty = 0;
+  std::size_t points = 0;
+};
+RestSlip pooled_rest_slip(const std::vector<Run>& runs) {
+  double sum = 0, sq = 0, bound = 0;
+  std::size_t n = 0;
+  for (const Run& r : runs) {
+    const auto k = static_cast<double>(r.rest_slip_points);
+    sum += k * r.rest_slip_mean;
+    sq += k * (r.rest_slip_sd * r.rest_slip_sd + r.rest_slip_mean * r.rest_slip_mean);
+    n += r.rest_slip_points;
+    const double v_mps = r.v_ref_mps.empty() ? 0.0 : r.v_ref_mps.front();
+    if (v_mps > 0)
+      bound =
+          std::max(bound, r.ref_bias_bound + 0.5 * (r.v_wheel_step_mps + r.v_ref_step_mps) / v_mps);
+  }
+  if (n == 0) return {};
+  const double mean = sum / static_cast<double>(n);
+  const double sd = std::sqrt(std::max(0.0, sq / static_cast<double>(n) - mean * mean));
+  return {mean, 3.0 * sd / std::sqrt(static_cast<double>(n)) + bound, n};
+}
+
+/// The fastest run's median reference speed over the slowest's.
+double roller_speed_spread(const std::vector<Run>& runs) {
+  double lo = INFINITY, hi = 0;
+  for (const Run& r : runs) {
+    if (r.v_ref_mps.empty()) continue;
+    std::vector<double> v = r.v_ref_mps;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    lo = std::min(lo, v[v.size() / 2]);
+    hi = std::max(hi, v[v.size() / 2]);
+  }
+  return hi > 0 && lo > 0 ? hi / lo : 1.0;
+}
+
 }  // namespace
+
+void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double rest_bar) {
+  double sum = 0, sq = 0;
+  std::size_t n = 0;
+  for (const pipeline::Sample& s : lead_in) {
+    // The reference moving as condition() takes it (0.3 m/s), the brake at rest.
+    if (s.pressure_bar > rest_bar || !(s.v_ref_mps >= 0.3) || !std::isfinite(s.v_wheel_mps))
+      continue;
+    const double slip = 1.0 - s.v_wheel_mps / s.v_ref_mps;
+    sum += slip;
+    sq += slip * slip;
+    ++n;
+  }
+  r.rest_slip_points = n;
+  if (n == 0) return;
+  r.rest_slip_mean = sum / static_cast<double>(n);
+  r.rest_slip_sd =
+      std::sqrt(std::max(0.0, sq / static_cast<double>(n) - r.rest_slip_mean * r.rest_slip_mean));
+}
 
 std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f,
                                                 const std::vector<Run>& runs) {
@@ -72,6 +131,33 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit&
                     "Formula fits alike; not accepted",
                     e.params[0].second, e.gain, 100 * ratio, 100 * kDeadZoneMaxSlipRatio),
         "the wheel did not roll free below the threshold"};
+  }
+  if (e.effect == Effect::SpeedFriction && roller) {
+    const double spread = roller_speed_spread(runs);
+    if (spread >= kSpeedFrictionMinSpeedSpread) return std::nullopt;
+    return MissingEvidence{
+        fmt::format("speed friction (lambda_mu_v {:.3g}) fits{{}} (held-out gain {:.3f}) but the "
+                    "rollers turned at one speed (the fastest run {:.2f}x the slowest; at one "
+                    "speed the slip speed is the slip times that speed, and the friction's fall "
+                    "with it is a curve that is not a Magic Formula); runs at speeds {:.1f}x apart "
+                    "would tell them apart; not accepted",
+                    e.params[0].second, e.gain, spread, kSpeedFrictionMinSpeedSpread),
+        "one roller speed: a curve shape fits alike"};
+  }
+  if (e.effect == Effect::SlipOffset) {
+    const double offset = e.params[0].second;
+    const RestSlip rest = pooled_rest_slip(runs);
+    if (rest.points < kOffsetMinRestPoints || rest.mean / offset >= kOffsetMinRestShare ||
+        std::abs(rest.mean - offset) <= rest.uncertainty)
+      return std::nullopt;
+    return MissingEvidence{
+        fmt::format("a slip offset of {:.2g} fits{{}} (held-out gain {:.3f}) but the wheel rolling "
+                    "free before the brake read a slip of {:.2g} +- {:.1g} ({} samples at rest; "
+                    "an offset reads there as itself, at least {:.0f} % of it); a curve steeper "
+                    "at its foot than a Magic Formula fits alike; not accepted",
+                    offset, e.gain, rest.mean, rest.uncertainty, rest.points,
+                    100 * kOffsetMinRestShare),
+        "the slip at rest does not show it"};
   }
   return std::nullopt;
 }

@@ -4,6 +4,7 @@
 #include <array>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -193,6 +194,21 @@ inline constexpr double kDeadZoneMaxSlipRatio = 0.25;
 struct MissingEvidence {
   std::string note, decision;
 };
+/// Run::rest_slip_*: the slip of the lead-in's samples at rest (pressure at most rest_bar, the
+/// reference moving), before the rise the run starts at.
+void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double rest_bar);
+/// A slip offset reads as itself while the wheel rolls free: the slip at rest must carry at least
+/// this share of a fitted offset, unless the two agree within the rest slip's uncertainty
+/// (generator C's Burckhardt curves and load transfer were fitted with offsets of 5-7e-4 whose
+/// runs rested at 0 +- 1e-4; its true offsets, 5e-3 to 2e-2, rested at themselves within 3 %).
+inline constexpr double kOffsetMinRestShare = 0.5;
+/// On a roller the slip speed is the slip times the roller's speed: speed friction is told from the
+/// tyre's curve shape only where the runs' speeds differ by at least this factor (generator C's
+/// Burckhardt rollers at one speed were named speed_friction with lambda_mu_v 8-12, a friction
+/// falling 20 % at 27 % slip; tyres' 0.8-1.5 move it 3 % at 5 km/h).
+inline constexpr double kSpeedFrictionMinSpeedSpread = 1.5;
+/// Fewer samples at rest than this over all runs: the offset cannot be checked there.
+inline constexpr std::size_t kOffsetMinRestPoints = 10;
 std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f,
                                                 const std::vector<Run>& runs);
 /// Held-out folds at most: up to this many runs each is held out alone (leave one run out).

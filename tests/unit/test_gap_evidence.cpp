@@ -1,5 +1,6 @@
 // The evidence only one effect leaves (issue 34): a brake threshold holds the wheel rolling free
-// while the pressure rises to it; a steep foot of a curve that is not a Magic Formula does not.
+// while the pressure rises to it; a steep foot of a curve that is not a Magic Formula does not. A
+// slip offset reads as itself while the wheel rolls free; speed friction needs roller speeds apart.
 #include <gtest/gtest.h>
 
 #include "core/gap/gap.hpp"
@@ -43,4 +44,52 @@ TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
   gap::Run late = rise(false);
   for (double& x : late.force_n) x += 200.0;
   EXPECT_FALSE(gap::missing_evidence(s, f, {late, late}).has_value());
+}
+
+TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
+  gap::EffectScore s;
+  s.effect = gap::Effect::SlipOffset;
+  s.params = {{"slip_offset_ratio", -6e-4}};
+  s.gain = 0.2;
+  gap::Fit f;
+  f.params = {16.0, 1.6, 3125.0, 0.1, -6e-4};
+  auto at_rest = [](double mean, std::size_t points) {
+    gap::Run r = rise(false);
+    r.rest_slip_mean = mean;
+    r.rest_slip_sd = 2e-4;
+    r.rest_slip_points = points;
+    return r;
+  };
+  // The rest shows the offset: named. It shows none (a steep foot fitted as an offset): refused.
+  EXPECT_FALSE(gap::missing_evidence(s, f, {at_rest(-5.8e-4, 100), at_rest(-6.1e-4, 100)}));
+  const auto missing = gap::missing_evidence(s, f, {at_rest(1e-5, 100), at_rest(-2e-5, 100)});
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_NE(missing->note.find("rolling free before the brake"), std::string::npos);
+  // Too few samples at rest to say, or a rest whose noise covers the offset: not refused.
+  EXPECT_FALSE(gap::missing_evidence(s, f, {at_rest(0, 4), at_rest(0, 4)}));
+  gap::Run noisy = at_rest(0, 20);
+  noisy.rest_slip_sd = 3e-3;
+  EXPECT_FALSE(gap::missing_evidence(s, f, {noisy, noisy}));
+}
+
+TEST(GapEvidence, SpeedFrictionOnARollerNeedsRunsAtSpeedsApart) {
+  gap::EffectScore s;
+  s.effect = gap::Effect::SpeedFriction;
+  s.params = {{"lambda_mu_v", 10.0}};
+  s.gain = 0.2;
+  gap::Fit f;
+  f.params = {16.0, 1.6, 3125.0, 0.1, 10.0};
+  auto at_speed = [](double v_mps) {
+    gap::Run r = rise(false);
+    r.v_ref_mps.assign(r.t_s.size(), v_mps);
+    return r;
+  };
+  const auto missing = gap::missing_evidence(s, f, {at_speed(1.39), at_speed(1.40)});
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_NE(missing->note.find("one speed"), std::string::npos);
+  EXPECT_FALSE(gap::missing_evidence(s, f, {at_speed(0.6), at_speed(1.6)}));
+  // On the ground a stop spans its speeds: not this check's to refuse.
+  gap::Run ground = at_speed(11.0);
+  ground.bench = can::BenchKind::Ground;
+  EXPECT_FALSE(gap::missing_evidence(s, f, {ground, ground}));
 }
