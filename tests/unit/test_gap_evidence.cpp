@@ -3,6 +3,8 @@
 // slip offset reads as itself while the wheel rolls free; speed friction needs roller speeds apart.
 #include <gtest/gtest.h>
 
+#include <utility>
+
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
 
@@ -27,15 +29,22 @@ gap::Run rise(bool dead_zone) {
   return r;
 }
 
+/// A candidate that passed the gates with its one parameter at `value`, and its fit: B C D of
+/// 80 kN (the curve's initial stiffness) and the parameter.
+std::pair<gap::EffectScore, gap::Fit> candidate(gap::Effect e, const char* name, double value) {
+  gap::EffectScore s;
+  s.effect = e;
+  s.params = {{name, value}};
+  s.gain = 0.3;
+  gap::Fit f;
+  f.params = {16.0, 1.6, 3125.0, 0.1, value};
+  return {s, f};
+}
+
 }  // namespace
 
 TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
-  gap::EffectScore s;
-  s.effect = gap::Effect::BrakeThreshold;
-  s.params = {{"p0_bar", 2.0}};
-  s.gain = 0.3;
-  gap::Fit f;
-  f.params = {16.0, 1.6, 3125.0, 0.1, 2.0};  // B C D = 80 kN
+  const auto [s, f] = candidate(gap::Effect::BrakeThreshold, "p0_bar", 2.0);
   EXPECT_FALSE(gap::missing_evidence(s, f, {rise(true), rise(true)}).has_value());
   const auto missing = gap::missing_evidence(s, f, {rise(false), rise(false)});
   ASSERT_TRUE(missing.has_value());
@@ -47,12 +56,7 @@ TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
 }
 
 TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
-  gap::EffectScore s;
-  s.effect = gap::Effect::SlipOffset;
-  s.params = {{"slip_offset_ratio", -6e-4}};
-  s.gain = 0.2;
-  gap::Fit f;
-  f.params = {16.0, 1.6, 3125.0, 0.1, -6e-4};
+  const auto [s, f] = candidate(gap::Effect::SlipOffset, "slip_offset_ratio", -6e-4);
   auto at_rest = [](double mean, std::size_t points) {
     gap::Run r = rise(false);
     r.rest_slip_mean = mean;
@@ -73,12 +77,7 @@ TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
 }
 
 TEST(GapEvidence, SpeedFrictionOnARollerNeedsRunsAtSpeedsApart) {
-  gap::EffectScore s;
-  s.effect = gap::Effect::SpeedFriction;
-  s.params = {{"lambda_mu_v", 10.0}};
-  s.gain = 0.2;
-  gap::Fit f;
-  f.params = {16.0, 1.6, 3125.0, 0.1, 10.0};
+  const auto [s, f] = candidate(gap::Effect::SpeedFriction, "lambda_mu_v", 10.0);
   auto at_speed = [](double v_mps) {
     gap::Run r = rise(false);
     r.v_ref_mps.assign(r.t_s.size(), v_mps);
