@@ -97,7 +97,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   full.wheel_load_n = c.wheel_load_n;
   std::vector<double> v_wheel, pressure;
   auto take = [&](const pipeline::Sample& s) {
-    if (s.v_ref_mps < 0.3) return;
+    if (s.v_ref_mps < kMinRefSpeedMps) return;
     const double f = o.force == pipeline::ForceSource::Tester
                          ? s.force_n
                          : c.brake_gain_n_per_bar * s.pressure_bar;
@@ -361,8 +361,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.v_wheel_step_mps = full.v_wheel_step_mps;
   r.force_step_n = full.force_step_n;
   r.ref_bias_bound = full.ref_bias_bound;
-  r.rest_slip_mean = full.rest_slip_mean;
-  r.rest_slip_sd = full.rest_slip_sd;
+  r.rest_slip_sum = full.rest_slip_sum;
+  r.rest_slip_sq_sum = full.rest_slip_sq_sum;
   r.rest_slip_points = full.rest_slip_points;
   r.initial_slip_rate_per_s = full.initial_slip_rate_per_s;
   r.initial_force_n = full.initial_force_n;

@@ -49,9 +49,8 @@ RestSlip pooled_rest_slip(const std::vector<Run>& runs) {
   double sum = 0, sq = 0, bound = 0;
   std::size_t n = 0;
   for (const Run& r : runs) {
-    const auto k = static_cast<double>(r.rest_slip_points);
-    sum += k * r.rest_slip_mean;
-    sq += k * (r.rest_slip_sd * r.rest_slip_sd + r.rest_slip_mean * r.rest_slip_mean);
+    sum += r.rest_slip_sum;
+    sq += r.rest_slip_sq_sum;
     n += r.rest_slip_points;
     const double v_mps = r.v_ref_mps.empty() ? 0.0 : r.v_ref_mps.front();
     if (v_mps > 0)
@@ -80,22 +79,17 @@ double roller_speed_spread(const std::vector<Run>& runs) {
 }  // namespace
 
 void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double rest_bar) {
-  double sum = 0, sq = 0;
-  std::size_t n = 0;
+  r.rest_slip_sum = r.rest_slip_sq_sum = 0;
+  r.rest_slip_points = 0;
   for (const pipeline::Sample& s : lead_in) {
-    // The reference moving as condition() takes it (0.3 m/s), the brake at rest.
-    if (s.pressure_bar > rest_bar || !(s.v_ref_mps >= 0.3) || !std::isfinite(s.v_wheel_mps))
+    if (s.pressure_bar > rest_bar || !(s.v_ref_mps >= kMinRefSpeedMps) ||
+        !std::isfinite(s.v_wheel_mps))
       continue;
     const double slip = 1.0 - s.v_wheel_mps / s.v_ref_mps;
-    sum += slip;
-    sq += slip * slip;
-    ++n;
+    r.rest_slip_sum += slip;
+    r.rest_slip_sq_sum += slip * slip;
+    ++r.rest_slip_points;
   }
-  r.rest_slip_points = n;
-  if (n == 0) return;
-  r.rest_slip_mean = sum / static_cast<double>(n);
-  r.rest_slip_sd =
-      std::sqrt(std::max(0.0, sq / static_cast<double>(n) - r.rest_slip_mean * r.rest_slip_mean));
 }
 
 std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f,

@@ -140,9 +140,9 @@ struct Run {
   /// a step: a slip bias of up to this much, its own in every run (0: not such a channel).
   double ref_bias_bound = 0.0;
   /// The slip while the brake was at rest before the run (the event's lead-in, pressure under
-  /// the rest level): its mean, standard deviation and count (0: no such samples). A slip offset
-  /// reads there as itself (missing_evidence).
-  double rest_slip_mean = 0.0, rest_slip_sd = 0.0;
+  /// the rest level): the sum of its samples, of their squares, and their count (0: no such
+  /// samples). A slip offset reads there as itself (missing_evidence).
+  double rest_slip_sum = 0.0, rest_slip_sq_sum = 0.0;
   std::size_t rest_slip_points = 0;
   double ref_bias_removed = 0.0;  ///< the bias taken out (level_reference_biases)
   /// The bias the levelling wanted before its bound (the intercept's offset), and how that moves

@@ -194,6 +194,8 @@ inline constexpr double kDeadZoneMaxSlipRatio = 0.25;
 struct MissingEvidence {
   std::string note, decision;
 };
+/// Below this reference speed a sample is not taken (the slip's ratio would blow up).
+inline constexpr double kMinRefSpeedMps = 0.3;
 /// Run::rest_slip_*: the slip of the lead-in's samples at rest (pressure at most rest_bar, the
 /// reference moving), before the rise the run starts at.
 void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double rest_bar);

@@ -192,7 +192,10 @@ TEST(Gap, TheTyresOwnShiftIsANuisanceNotASlipOffset) {
     ASSERT_GE(rs.size(), 3u);
     for (gap::Run& r : rs) {
       for (double& k : r.slip) k += shift;
-      r.rest_slip_mean += shift;  // an offset reads at rest too (the wheel rolling free)
+      // An offset reads at rest too (the wheel rolling free): each rest sample moves by it.
+      const auto n = static_cast<double>(r.rest_slip_points);
+      r.rest_slip_sq_sum += 2 * shift * r.rest_slip_sum + n * shift * shift;
+      r.rest_slip_sum += n * shift;
     }
     const gap::Report r =
         gap::diagnose(rs, sim::pooled_start(rs), gap::calibrated_options(gap::Condition::Ground));

@@ -57,10 +57,12 @@ TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
 
 TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
   const auto [s, f] = candidate(gap::Effect::SlipOffset, "slip_offset_ratio", -6e-4);
-  auto at_rest = [](double mean, std::size_t points) {
+  // A run whose samples at rest have this mean and standard deviation.
+  auto at_rest = [](double mean, std::size_t points, double sd = 2e-4) {
     gap::Run r = rise(false);
-    r.rest_slip_mean = mean;
-    r.rest_slip_sd = 2e-4;
+    const auto n = static_cast<double>(points);
+    r.rest_slip_sum = n * mean;
+    r.rest_slip_sq_sum = n * (sd * sd + mean * mean);
     r.rest_slip_points = points;
     return r;
   };
@@ -71,8 +73,7 @@ TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
   EXPECT_NE(missing->note.find("rolling free before the brake"), std::string::npos);
   // Too few samples at rest to say, or a rest whose noise covers the offset: not refused.
   EXPECT_FALSE(gap::missing_evidence(s, f, {at_rest(0, 4), at_rest(0, 4)}));
-  gap::Run noisy = at_rest(0, 20);
-  noisy.rest_slip_sd = 3e-3;
+  const gap::Run noisy = at_rest(0, 20, 3e-3);
   EXPECT_FALSE(gap::missing_evidence(s, f, {noisy, noisy}));
 }
 
