@@ -216,6 +216,13 @@ struct Options {
   /// least this held-out gain, else none is named (fit-quality check: a curve that is not a Magic
   /// Formula makes every candidate nibble at the residual; a real effect takes a large bite).
   double min_first_gain = 0.4;
+  /// Below noise_factor x the floor a structured gap is still left where the held-out error lies
+  /// above structure_floor_share x noise_factor x the floor (with the shipped factor 1.5: 1.2 x,
+  /// above every null set measured, generator A's at 0.91-1.11, C's at 0.83-1.05) and keeps more
+  /// than max_structure_left_share of the structure beyond the noise, sqrt(gap^2 - floor^2),
+  /// that the baseline left.
+  double structure_floor_share = 0.8;
+  double max_structure_left_share = 0.5;
   /// An effect is named only where the baseline's held-out gap exceeds this x the noise floor: a
   /// baseline that already fits within the noise leaves nothing for an effect to explain. Below
   /// 1: the floor is an estimate, known to about 10 % (generator A's null sets, whose noise is

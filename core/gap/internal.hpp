@@ -238,6 +238,15 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
                     const Fitter& fit, const Options& o, const char* separability_note,
                     bool ripple_per_candidate);
 
+/// The share of the structure beyond the noise that a held-out error after_n keeps of the one
+/// before_n left (noise and structure add in quadrature: sqrt(gap^2 - noise^2)); 1 where nothing
+/// beyond the noise was there to explain.
+double structure_left_share(double before_n, double after_n, double noise_n);
+/// The fit-quality check's "a structured gap is left": after_n above noise_factor x the noise,
+/// or above structure_floor_share x that while keeping more than max_structure_left_share of the
+/// structure the baseline (before_n) left.
+bool structured_gap_left(double before_n, double after_n, double noise_n, const Options& o);
+
 /// A parameter at the end of its physical range (a lower end that is physical, a lag of 0, aside).
 bool at_bound(double v, const EffectParam& p);
 

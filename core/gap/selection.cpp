@@ -66,6 +66,18 @@ static bool params_inside(Effect e, const Fit& f) {
   return true;
 }
 
+double structure_left_share(double before_n, double after_n, double noise_n) {
+  const double before = before_n * before_n - noise_n * noise_n;
+  if (!(before > 0)) return 1.0;
+  return std::sqrt(std::max(0.0, after_n * after_n - noise_n * noise_n) / before);
+}
+
+bool structured_gap_left(double before_n, double after_n, double noise_n, const Options& o) {
+  return after_n > o.noise_factor * noise_n ||
+         (after_n > o.structure_floor_share * o.noise_factor * noise_n &&
+          structure_left_share(before_n, after_n, noise_n) > o.max_structure_left_share);
+}
+
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
 
@@ -433,13 +445,22 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   // curve against the other alone).
   if (named(chosen).size() > 1)
     first = std::max(first, 1.0 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12));
-  if (!named(chosen).empty() && current_heldout > o.noise_factor * rep.noise_n &&
-      first < o.min_first_gain)
+  // A structured gap is left above noise_factor x the floor, or where most of the structure
+  // beyond the noise is still there and what is left lies clear of the floor's own scatter: a
+  // curve that is not a Magic Formula, whose structure is a few times the noise, is left under
+  // noise_factor x the floor by a candidate that takes a small bite of it.
+  const bool structure_left =
+      structured_gap_left(rep.gap_before_rmse_n, current_heldout, rep.noise_n, o);
+  const double left_share =
+      structure_left_share(rep.gap_before_rmse_n, current_heldout, rep.noise_n);
+  if (!named(chosen).empty() && structure_left && first < o.min_first_gain)
     veto(fmt::format(
              "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
-             "left against {:.1f} N of noise: the residual has a structure no candidate explains "
-             "(is the curve a Magic Formula?), so no effect is named",
-             to_string(named(chosen).front()), 100 * first, current_heldout, rep.noise_n),
+             "left against {:.1f} N of noise ({:.0f} % of the structure beyond the noise): the "
+             "residual has a structure no candidate explains (is the curve a Magic Formula?), so "
+             "no effect is named",
+             to_string(named(chosen).front()), 100 * first, current_heldout, rep.noise_n,
+             100 * left_share),
          "passed, but vetoed by the fit-quality check (see the notes)");
   // Nothing to explain: the baseline's held-out gap is within the noise floor (below
   // min_gap_over_floor x the floor, the floor's own uncertainty allowed for). A candidate may

@@ -1,8 +1,10 @@
 // The evidence only one effect leaves (issue 34): a brake threshold holds the wheel rolling free
 // while the pressure rises to it; a steep foot of a curve that is not a Magic Formula does not. A
 // slip offset reads as itself while the wheel rolls free; speed friction needs roller speeds apart.
+// A first effect leaves no structure most of which no candidate explains (the fit-quality check).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <utility>
 
 #include "core/gap/gap.hpp"
@@ -92,4 +94,26 @@ TEST(GapEvidence, SpeedFrictionOnARollerNeedsRunsAtSpeedsApart) {
   gap::Run ground = at_speed(11.0);
   ground.bench = can::BenchKind::Ground;
   EXPECT_FALSE(gap::missing_evidence(s, f, {ground, ground}));
+}
+
+TEST(GapFitQuality, AStructureLeftUnderTheFitQualityFactorStillCountsWhereMostOfItRemains) {
+  const gap::Options o;  // noise_factor 1.5; 0.8 of it (1.2 x the floor), share 0.5
+  // Noise and structure add in quadrature: 5 N of structure on 3 N of noise is a 5.83 N gap.
+  EXPECT_NEAR(gap::structure_left_share(std::hypot(5.0, 3.0), std::hypot(2.5, 3.0), 3.0), 0.5,
+              1e-12);
+  EXPECT_DOUBLE_EQ(gap::structure_left_share(2.0, 2.0, 3.0), 1.0);  // nothing beyond the noise
+  EXPECT_DOUBLE_EQ(gap::structure_left_share(10.0, 2.0, 3.0), 0.0);
+  // A curve that is not a Magic Formula (1.96 x the floor) cut to 1.40 x by a candidate that
+  // explains 29 % of the gap: 58 % of its structure is left, under the factor of 1.5.
+  EXPECT_TRUE(gap::structured_gap_left(67.8, 48.4, 34.7, o));
+  // A small real effect at the floor's edge (1.3 x it, taken to 1.1 x): what is left lies in the
+  // floor's own scatter, whatever its share.
+  EXPECT_FALSE(gap::structured_gap_left(1.3, 1.1, 1.0, o));
+  // An effect that takes most of the structure and leaves 1.3 x the floor (4 x before).
+  EXPECT_FALSE(gap::structured_gap_left(4.0, 1.3, 1.0, o));
+  // Above the fit-quality factor a gap is left, however much was explained.
+  EXPECT_TRUE(gap::structured_gap_left(40.0, 1.6, 1.0, o));
+  gap::Options old = o;
+  old.max_structure_left_share = 1.0;  // only the factor
+  EXPECT_FALSE(gap::structured_gap_left(67.8, 48.4, 34.7, old));
 }
