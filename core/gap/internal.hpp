@@ -247,6 +247,16 @@ double structure_left_share(double before_n, double after_n, double noise_n);
 /// structure the baseline (before_n) left.
 bool structured_gap_left(double before_n, double after_n, double noise_n, const Options& o);
 
+/// The fit-quality check on the first named effect (first_gain: its held-out gain, or the share
+/// the named effects explain together) against the largest round-1 gain of any other candidate.
+enum class FitQuality {
+  Explained,  ///< no structured gap is left, or the first effect took min_first_gain of the gap
+  OneBite,    ///< a gap is left, but the first effect stands out (min_bite_over_runner_up): named
+  Nibble,     ///< a gap is left and candidates nibble alike: nothing is named
+};
+FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n, double after_n,
+                       double noise_n, const Options& o);
+
 /// A parameter at the end of its physical range (a lower end that is physical, a lag of 0, aside).
 bool at_bound(double v, const EffectParam& p);
 

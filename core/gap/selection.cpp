@@ -78,6 +78,22 @@ bool structured_gap_left(double before_n, double after_n, double noise_n, const 
           structure_left_share(before_n, after_n, noise_n) > o.max_structure_left_share);
 }
 
+FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n, double after_n,
+                       double noise_n, const Options& o) {
+  // A structured gap is left above noise_factor x the floor, or where most of the structure
+  // beyond the noise is still there and what is left lies clear of the floor's own scatter: a
+  // curve that is not a Magic Formula, whose structure is a few times the noise, is left under
+  // noise_factor x the floor by a candidate that takes a small bite of it.
+  if (!structured_gap_left(before_n, after_n, noise_n, o) || first_gain >= o.min_first_gain)
+    return FitQuality::Explained;
+  // One bite, not a nibble: a curve that is not a Magic Formula lets several candidates (a cap,
+  // a threshold, an offset) nibble alike, while a real effect that its law matches only in part
+  // (a tyre's own load laws under a strong load transfer) stands alone.
+  if (first_gain >= o.gate_gain && first_gain >= o.min_bite_over_runner_up * runner_up_gain)
+    return FitQuality::OneBite;
+  return FitQuality::Nibble;
+}
+
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
 
@@ -445,22 +461,29 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   // curve against the other alone).
   if (named(chosen).size() > 1)
     first = std::max(first, 1.0 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12));
-  // A structured gap is left above noise_factor x the floor, or where most of the structure
-  // beyond the noise is still there and what is left lies clear of the floor's own scatter: a
-  // curve that is not a Magic Formula, whose structure is a few times the noise, is left under
-  // noise_factor x the floor by a candidate that takes a small bite of it.
-  const bool structure_left =
-      structured_gap_left(rep.gap_before_rmse_n, current_heldout, rep.noise_n, o);
-  const double left_share =
-      structure_left_share(rep.gap_before_rmse_n, current_heldout, rep.noise_n);
-  if (!named(chosen).empty() && structure_left && first < o.min_first_gain)
+  double runner_up = 0.0;  // the largest round-1 gain of a candidate other than the first named
+  if (!named(chosen).empty())
+    for (const auto& e : rep.effects)
+      if (e.round == 0 && e.effect != named(chosen).front())
+        runner_up = std::max(runner_up, e.gain);
+  const FitQuality q =
+      fit_quality(first, runner_up, rep.gap_before_rmse_n, current_heldout, rep.noise_n, o);
+  if (!named(chosen).empty() && q == FitQuality::OneBite)
+    rep.notes.push_back(fmt::format(
+        "{} explains only {:.0f} % of the held-out gap, under the fit-quality share ({:.0f} %), "
+        "but {:.1f}x the gain of any other candidate ({:.3f}): one effect stands out, which a "
+        "curve that is not a Magic Formula does not give (its candidates nibble alike); it is "
+        "named, with the gap it leaves",
+        to_string(named(chosen).front()), 100 * first, 100 * o.min_first_gain,
+        first / std::max(runner_up, 1e-12), runner_up));
+  if (!named(chosen).empty() && q == FitQuality::Nibble)
     veto(fmt::format(
              "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
              "left against {:.1f} N of noise ({:.0f} % of the structure beyond the noise): the "
              "residual has a structure no candidate explains (is the curve a Magic Formula?), so "
              "no effect is named",
              to_string(named(chosen).front()), 100 * first, current_heldout, rep.noise_n,
-             100 * left_share),
+             100 * structure_left_share(rep.gap_before_rmse_n, current_heldout, rep.noise_n)),
          "passed, but vetoed by the fit-quality check (see the notes)");
   // Nothing to explain: the baseline's held-out gap is within the noise floor (below
   // min_gap_over_floor x the floor, the floor's own uncertainty allowed for). A candidate may
