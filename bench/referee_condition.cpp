@@ -263,9 +263,17 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
         "misspecified");
     int ok = 0;
     std::map<std::string, int> said;
-    for (const auto& r : mis) {
+    for (std::size_t k = 0; k < mis.size(); ++k) {
+      const auto& r = mis[k];
       ++said[r.verdict.empty() ? "?" : r.verdict.front()];
       ok += r.correct();
+      // A claim on a tyre that is not a Magic Formula, to be looked at (--why: its notes).
+      if (!r.correct() && st.why) {
+        std::cerr << fmt::format("[{}] misspecified {} said {} (gap before / floor {:.2f})\n",
+                                 cname, k, fmt::join(r.verdict, ", "),
+                                 r.gap_before_n / std::max(r.noise_n, 1e-9));
+        for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
+      }
     }
     j["misspecified_trials"] = st.misspecified;
     j["misspecified_none_or_unexplained"] = static_cast<double>(ok) / st.misspecified;

@@ -249,13 +249,15 @@ bool structured_gap_left(double before_n, double after_n, double noise_n, const 
 
 /// The fit-quality check on the first named effect (first_gain: its held-out gain, or the share
 /// the named effects explain together) against the largest round-1 gain of any other candidate.
+/// law_in_part: the effect's law stands for a family of laws (load transfer's one stiffness
+/// ratio for a tyre's own load laws), which a real effect may match only in part.
 enum class FitQuality {
   Explained,  ///< no structured gap is left, or the first effect took min_first_gain of the gap
-  OneBite,    ///< a gap is left, but the first effect stands out (min_bite_over_runner_up): named
+  OneBite,    ///< a gap is left, but the first effect, of such a law, stands out: named
   Nibble,     ///< a gap is left and candidates nibble alike: nothing is named
 };
 FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n, double after_n,
-                       double noise_n, const Options& o);
+                       double noise_n, bool law_in_part, const Options& o);
 
 /// A parameter at the end of its physical range (a lower end that is physical, a lag of 0, aside).
 bool at_bound(double v, const EffectParam& p);

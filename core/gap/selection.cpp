@@ -79,7 +79,7 @@ bool structured_gap_left(double before_n, double after_n, double noise_n, const 
 }
 
 FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n, double after_n,
-                       double noise_n, const Options& o) {
+                       double noise_n, bool law_in_part, const Options& o) {
   // A structured gap is left above noise_factor x the floor, or where most of the structure
   // beyond the noise is still there and what is left lies clear of the floor's own scatter: a
   // curve that is not a Magic Formula, whose structure is a few times the noise, is left under
@@ -88,8 +88,11 @@ FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n
     return FitQuality::Explained;
   // One bite, not a nibble: a curve that is not a Magic Formula lets several candidates (a cap,
   // a threshold, an offset) nibble alike, while a real effect that its law matches only in part
-  // (a tyre's own load laws under a strong load transfer) stands alone.
-  if (first_gain >= o.gate_gain && first_gain >= o.min_bite_over_runner_up * runner_up_gain)
+  // (a tyre's own load laws under a strong load transfer) stands alone. Only for such a law: a
+  // lag or a threshold that fits in part is not that effect (a brush-model tyre on a roller let
+  // a time offset take 27 % of its gap, 6.8x any other candidate).
+  if (law_in_part && first_gain >= o.gate_gain &&
+      first_gain >= o.min_bite_over_runner_up * runner_up_gain)
     return FitQuality::OneBite;
   return FitQuality::Nibble;
 }
@@ -466,8 +469,13 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
     for (const auto& e : rep.effects)
       if (e.round == 0 && e.effect != named(chosen).front())
         runner_up = std::max(runner_up, e.gain);
-  const FitQuality q =
-      fit_quality(first, runner_up, rep.gap_before_rmse_n, current_heldout, rep.noise_n, o);
+  // Load transfer's law is one stiffness ratio for a tyre's own load laws of D, Kx and E.
+  const bool law_in_part =
+      !named(chosen).empty() && (named(chosen).front() == Effect::LoadTransfer ||
+                                 named(chosen).front() == Effect::LoadTransferShape ||
+                                 named(chosen).front() == Effect::LoadTransferMeasured);
+  const FitQuality q = fit_quality(first, runner_up, rep.gap_before_rmse_n, current_heldout,
+                                   rep.noise_n, law_in_part, o);
   if (!named(chosen).empty() && q == FitQuality::OneBite)
     rep.notes.push_back(fmt::format(
         "{} explains only {:.0f} % of the held-out gap, under the fit-quality share ({:.0f} %), "

@@ -122,12 +122,15 @@ TEST(GapFitQuality, OneEffectStandingOutIsNamedWhereSeveralNibblingAlikeAreNot) 
   const gap::Options o;  // fit-quality share 0.4, one bite at 3x the runner-up, gain gate 0.10
   // A strong load transfer read through one law where the tyre has its own: 22 % of a 72 N gap
   // on a 17 N floor, and 3.9x the next candidate's gain.
-  EXPECT_EQ(gap::fit_quality(0.225, 0.058, 72.2, 55.9, 17.0, o), gap::FitQuality::OneBite);
+  EXPECT_EQ(gap::fit_quality(0.225, 0.058, 72.2, 55.9, 17.0, true, o), gap::FitQuality::OneBite);
+  // A law that is exact (a lag, a threshold) and fits in part is not the effect, standing out or
+  // not (a brush-model tyre's time offset: 27 % of the gap, 6.8x the runner-up).
+  EXPECT_EQ(gap::fit_quality(0.27, 0.04, 72.2, 52.7, 9.2, false, o), gap::FitQuality::Nibble);
   // A curve that is not a Magic Formula: a threshold and an offset take 29 % and 28 %.
-  EXPECT_EQ(gap::fit_quality(0.286, 0.275, 67.8, 48.4, 34.7, o), gap::FitQuality::Nibble);
+  EXPECT_EQ(gap::fit_quality(0.286, 0.275, 67.8, 48.4, 34.7, true, o), gap::FitQuality::Nibble);
   // Standing out is not enough under the gain gate, and a large bite needs no rival's measure.
-  EXPECT_EQ(gap::fit_quality(0.09, 0.0, 72.2, 65.7, 17.0, o), gap::FitQuality::Nibble);
-  EXPECT_EQ(gap::fit_quality(0.5, 0.45, 72.2, 36.1, 17.0, o), gap::FitQuality::Explained);
+  EXPECT_EQ(gap::fit_quality(0.09, 0.0, 72.2, 65.7, 17.0, true, o), gap::FitQuality::Nibble);
+  EXPECT_EQ(gap::fit_quality(0.5, 0.45, 72.2, 36.1, 17.0, false, o), gap::FitQuality::Explained);
   // Nothing structured left: whatever the gains.
-  EXPECT_EQ(gap::fit_quality(0.15, 0.14, 1.3, 1.1, 1.0, o), gap::FitQuality::Explained);
+  EXPECT_EQ(gap::fit_quality(0.15, 0.14, 1.3, 1.1, 1.0, false, o), gap::FitQuality::Explained);
 }
