@@ -223,8 +223,8 @@ struct Options {
   /// that the baseline left.
   double structure_floor_share = 0.8;
   double max_structure_left_share = 0.5;
-  /// A first effect under min_first_gain is still named where its round-1 gain is at least this
-  /// x every other candidate's (one bite, not several nibbling alike: generator C's Burckhardt
+  /// Load transfer under min_first_gain is still named where its round-1 gain is at least this x
+  /// every other candidate's (one bite, not several nibbling alike: generator C's Burckhardt
   /// curves gave their best candidates 1.04-1.25x the runner-up's gain).
   double min_bite_over_runner_up = 3.0;
   /// An effect is named only where the baseline's held-out gap exceeds this x the noise floor: a

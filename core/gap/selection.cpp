@@ -457,40 +457,40 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   }
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
-  double first = 0.0;
-  for (const auto& e : rep.effects)
-    if (named(chosen).size() > 0 && e.effect == named(chosen).front()) first = e.gain;
+  const std::vector<Effect> names = named(chosen);
+  double first = 0.0, runner_up = 0.0;  // runner_up: the largest other round-1 gain
+  for (const auto& e : rep.effects) {
+    if (names.empty()) break;
+    if (e.effect == names.front())
+      first = e.gain;
+    else if (e.round == 0)
+      runner_up = std::max(runner_up, e.gain);
+  }
   // Two or more named: the share they explain together (a pair's members may each bend the
   // curve against the other alone).
-  if (named(chosen).size() > 1)
+  if (names.size() > 1)
     first = std::max(first, 1.0 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12));
-  double runner_up = 0.0;  // the largest round-1 gain of a candidate other than the first named
-  if (!named(chosen).empty())
-    for (const auto& e : rep.effects)
-      if (e.round == 0 && e.effect != named(chosen).front())
-        runner_up = std::max(runner_up, e.gain);
   // Load transfer's law is one stiffness ratio for a tyre's own load laws of D, Kx and E.
-  const bool law_in_part =
-      !named(chosen).empty() && (named(chosen).front() == Effect::LoadTransfer ||
-                                 named(chosen).front() == Effect::LoadTransferShape ||
-                                 named(chosen).front() == Effect::LoadTransferMeasured);
+  const bool law_in_part = !names.empty() && (names.front() == Effect::LoadTransfer ||
+                                              names.front() == Effect::LoadTransferShape ||
+                                              names.front() == Effect::LoadTransferMeasured);
   const FitQuality q = fit_quality(first, runner_up, rep.gap_before_rmse_n, current_heldout,
                                    rep.noise_n, law_in_part, o);
-  if (!named(chosen).empty() && q == FitQuality::OneBite)
+  if (!names.empty() && q == FitQuality::OneBite)
     rep.notes.push_back(fmt::format(
         "{} explains only {:.0f} % of the held-out gap, under the fit-quality share ({:.0f} %), "
         "but {:.1f}x the gain of any other candidate ({:.3f}): one effect stands out, which a "
         "curve that is not a Magic Formula does not give (its candidates nibble alike); it is "
         "named, with the gap it leaves",
-        to_string(named(chosen).front()), 100 * first, 100 * o.min_first_gain,
+        to_string(names.front()), 100 * first, 100 * o.min_first_gain,
         first / std::max(runner_up, 1e-12), runner_up));
-  if (!named(chosen).empty() && q == FitQuality::Nibble)
+  if (!names.empty() && q == FitQuality::Nibble)
     veto(fmt::format(
              "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
              "left against {:.1f} N of noise ({:.0f} % of the structure beyond the noise): the "
              "residual has a structure no candidate explains (is the curve a Magic Formula?), so "
              "no effect is named",
-             to_string(named(chosen).front()), 100 * first, current_heldout, rep.noise_n,
+             to_string(names.front()), 100 * first, current_heldout, rep.noise_n,
              100 * structure_left_share(rep.gap_before_rmse_n, current_heldout, rep.noise_n)),
          "passed, but vetoed by the fit-quality check (see the notes)");
   // Nothing to explain: the baseline's held-out gap is within the noise floor (below
