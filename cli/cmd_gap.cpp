@@ -232,11 +232,10 @@ condition).</p>
 }
 
 /// The vehicle's load transfer declared from its geometry (--vehicle-mass, --cg-height,
-/// --wheelbase), held in place of any the diagnosis measured: the geometry is known exactly, the
-/// diagnosis's magnitude to its standard error.
-void declare_load_transfer(gap::BenchModel& bm, gap::Condition condition,
-                           const std::vector<gap::Run>& runs, double mass_kg, double cg_height_m,
-                           double wheelbase_m, bool front) {
+/// --wheelbase): the geometry is known exactly, a diagnosed magnitude only to its standard error.
+gap::BenchEffect declared_load_transfer(gap::Condition condition, const std::vector<gap::Run>& runs,
+                                        double mass_kg, double cg_height_m, double wheelbase_m,
+                                        bool front) {
   if (condition != gap::Condition::Ground)
     throw ExitError(kExitUsage,
                     "gap: --cg-height and --wheelbase describe a ground test's vehicle; these runs "
@@ -253,8 +252,12 @@ void declare_load_transfer(gap::BenchModel& bm, gap::Condition condition,
                     "gap: the runs carry no wheel load (the bench calibration's wheel_load_n): "
                     "the declared load transfer cannot be put relative to it");
   std::sort(loads.begin(), loads.end());
-  const gap::BenchEffect declared = gap::declared_load_transfer(mass_kg, cg_height_m, wheelbase_m,
-                                                                loads[loads.size() / 2], front);
+  return gap::declared_load_transfer(mass_kg, cg_height_m, wheelbase_m, loads[loads.size() / 2],
+                                     front);
+}
+
+/// The declared load transfer in the bench model, in place of any the diagnosis measured.
+void hold_declared_load_transfer(gap::BenchModel& bm, const gap::BenchEffect& declared) {
   auto& effects = bm.effects;
   for (auto& e : effects)
     if (e.effect == gap::Effect::LoadTransfer) {
@@ -316,9 +319,10 @@ void add_gap_command(CLI::App& app) {
                   "gravity's height over the wheelbase (h/L), from the runs' wheel load")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--cg-height", o->cg_height_m,
-                  "with --vehicle-mass and --wheelbase (ground runs, --bench-model): the centre "
-                  "of gravity's height in m; the bench model then holds the vehicle's load "
-                  "transfer as declared, and the tyre's fits are at the wheel's static load")
+                  "with --vehicle-mass and --wheelbase (ground runs): the centre of gravity's "
+                  "height in m; the diagnosis holds the vehicle's load transfer as declared in "
+                  "every fit (not a candidate), as does the bench model, whose tyre fits are then "
+                  "at the wheel's static load")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--wheelbase", o->wheelbase_m, "the vehicle's wheelbase in m (see --cg-height)")
       ->check(CLI::PositiveNumber);
@@ -425,6 +429,13 @@ void add_gap_command(CLI::App& app) {
     gap::Options gap_options = gap::calibrated_options(condition);
     if (std::isfinite(o->gate_gain)) gap_options.gate_gain = o->gate_gain;
     gap_options.vehicle_mass_kg = o->vehicle_mass_kg;
+    std::optional<gap::BenchEffect> declared;
+    if (!transfer && (o->cg_height_m > 0 || o->wheelbase_m > 0)) {
+      declared = declared_load_transfer(condition, runs, o->vehicle_mass_kg, o->cg_height_m,
+                                        o->wheelbase_m, o->axle == "front");
+      gap_options.declared_load_per_decel_s2_per_m = declared->value;
+      gap_options.declared_kx_load_ratio = declared->more.at(0);
+    }
     if (std::isfinite(o->bic_margin)) gap_options.bic_margin = o->bic_margin;
     if (std::isfinite(o->fit_quality_factor)) gap_options.noise_factor = o->fit_quality_factor;
     spdlog::info(
@@ -451,9 +462,7 @@ void add_gap_command(CLI::App& app) {
         throw ExitError(kExitUsage,
                         "gap: --bench-model takes the runs of one bench (model vs measurement)");
       gap::BenchModel bm = gap::bench_model_from(rep, condition);
-      if (o->cg_height_m > 0 || o->wheelbase_m > 0)
-        declare_load_transfer(bm, condition, runs, o->vehicle_mass_kg, o->cg_height_m,
-                              o->wheelbase_m, o->axle == "front");
+      if (declared) hold_declared_load_transfer(bm, *declared);
       bm.model_hash = model.hash;
       bm.date = iso8601_utc(static_cast<std::int64_t>(std::time(nullptr)));
       bm.runs = o->files;

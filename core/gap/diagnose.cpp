@@ -85,9 +85,14 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         cap->cap_n, 100 * cap->spread, 100 * cap->end_slope_ratio, cap->fitted_peak_ratio);
     cap.reset();
   }
+  const bool declared_load = o.declared_load_per_decel_s2_per_m != 0;
   std::vector<Run> runs;
   for (const Run& r : runs_in) {
     Run cut = cap ? up_to(r, r.force_n, 0.98 * cap->cap_n) : r;
+    if (declared_load) {
+      cut.declared_load_per_decel_s2_per_m = o.declared_load_per_decel_s2_per_m;
+      cut.declared_kx_load_ratio = o.declared_kx_load_ratio;
+    }
     if (cut.t_s.size() >= kMinRunSamples) runs.push_back(std::move(cut));
   }
   if (runs.size() < 2)
@@ -96,6 +101,11 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
                     kMinRunSamples, cap ? " and below the force cap" : ""));
   Report rep;
   if (!cap_at_peak.empty()) rep.notes.push_back(cap_at_peak);
+  if (declared_load)
+    rep.notes.push_back(fmt::format(
+        "load transfer declared from the vehicle (D by 1 + {:.4g} per m/s^2 of deceleration, the "
+        "slip stiffness by that to the power {:.2f}): held in every fit, not a candidate",
+        o.declared_load_per_decel_s2_per_m, o.declared_kx_load_ratio));
   if (std::string note = share_roller_droop(runs); !note.empty()) rep.notes.push_back(note);
   if (std::string note = short_runs_note(runs); !note.empty()) rep.notes.push_back(note);
   // A constant quantised reference leaves a slip bias common to the runs within half a step: a
@@ -170,7 +180,8 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   // A cradle cap exists on a roller only.
   std::vector<Effect> candidates;
   for (Effect e : kAllEffects)
-    if (e != Effect::CradleCap || runs.front().bench == can::BenchKind::Roller)
+    if ((e != Effect::CradleCap || runs.front().bench == can::BenchKind::Roller) &&
+        !(declared_load && e == Effect::LoadTransfer))
       candidates.push_back(e);
   select_effects(rep, runs, candidates, fit, o,
                  "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at "

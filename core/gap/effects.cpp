@@ -145,6 +145,31 @@ std::vector<double> pitch_lagged_decel(const Run& r, double lag_s) {
   return out;
 }
 
+namespace {
+
+/// A declared load transfer reads the fifth wheel's deceleration through a centred mean over
+/// +-20 ms: the derivative of a quantised speed carries 0.1-0.2 m/s^2 of noise, which a load
+/// law turns into force (on generator A's ground, 14 N at 3 kN), while the body's pitch (1-1.5
+/// Hz) moves the load far slower than the mean's first zero (25 Hz).
+constexpr double kDeclaredLoadHalfWindowS = 0.02;
+
+/// The mean of y over the points within half_window_s of each point's time (zero phase).
+std::vector<double> centred_mean(const std::vector<double>& t_s, const std::vector<double>& y,
+                                 double half_window_s) {
+  const std::size_t n = y.size();
+  std::vector<double> out(n);
+  std::size_t lo = 0, hi = 0;
+  double sum = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    while (hi < n && t_s[hi] <= t_s[i] + half_window_s) sum += y[hi++];
+    while (t_s[lo] < t_s[i] - half_window_s) sum -= y[lo++];
+    out[i] = sum / static_cast<double>(hi - lo);
+  }
+  return out;
+}
+
+}  // namespace
+
 /// sigma dk'/dx = k - k' along the rolled distance x, solved exactly for slip linear between
 /// samples (the runs are decimated: an Euler step of 10-25 ms against a time constant sigma/V of
 /// 40-300 ms would misplace the lag). y0: the transient slip at the first sample.
@@ -202,6 +227,15 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   // state of the relaxation, which needs the force side).
   double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0, cap_n = INFINITY;
   bool relaxation = false, threshold = false;
+  if (const double q = r.declared_load_per_decel_s2_per_m; q != 0 && r.ref_decel_mps2.size() == n) {
+    const std::vector<double> decel =
+        centred_mean(r.t_s, r.ref_decel_mps2, kDeclaredLoadHalfWindowS);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double load = std::max(0.05, 1.0 + q * decel[i]);
+      d_scale[i] = load;
+      b_scale[i] = std::pow(load, r.declared_kx_load_ratio - 1.0);
+    }
+  }
   std::size_t next = 4;  // index of the current effect's first parameter in p
   for (const Effect effect : effects) {
     const double q = p[next];

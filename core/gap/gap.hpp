@@ -95,6 +95,10 @@ struct Run {
   /// data are not undone (a derivative of noisy pressure would be noise, and at the ramp's kink
   /// a smeared one).
   double pressure_filter_s = 0.0;
+  /// A load transfer declared from the vehicle (Options::declared_load_per_decel_s2_per_m): D by
+  /// 1 + q a and B C D by (1 + q a)^r, a the reference's deceleration through a +-20 ms centred
+  /// mean, in every fit, as a known part of the tyre's curve (0: none declared).
+  double declared_load_per_decel_s2_per_m = 0.0, declared_kx_load_ratio = 1.0;
   /// The speed channels' noise (robust scale of second differences, at least step/sqrt(12)) and
   /// quantisation steps (0: not quantised), and the force channel's step, before smoothing.
   double v_ref_sd_mps = 0.0, v_wheel_sd_mps = 0.0;
@@ -211,6 +215,11 @@ struct Options {
   /// The vehicle's mass where it is known (0: not): load transfer is also given as the centre of
   /// gravity's height over the wheelbase.
   double vehicle_mass_kg = 0.0;
+  /// A ground test's load transfer declared from the vehicle's geometry (declared_load_transfer:
+  /// the peak's q per m/s^2 and the slip stiffness's load ratio; 0: none): held in every fit, the
+  /// baseline's too, and not a candidate. Unheld, its change of the curve with the deceleration
+  /// is shared out among the instrument's effects (a wheel's inertia, a threshold) it resembles.
+  double declared_load_per_decel_s2_per_m = 0.0, declared_kx_load_ratio = 1.0;
   std::size_t max_effects = 3;  ///< forward selection depth
   /// When a gap above noise_factor x noise is left, the first accepted effect must have had at
   /// least this held-out gain, else none is named (fit-quality check: a curve that is not a Magic

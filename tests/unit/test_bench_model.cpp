@@ -176,6 +176,41 @@ TEST(BenchModel, TheDeclaredLoadTransferFollowsTheVehiclesGeometry) {
   EXPECT_NE(front.origin.find("1300 kg"), std::string::npos);
 }
 
+TEST(BenchModel, ADeclaredLoadTransferIsHeldInTheFitsThroughASmoothedDeceleration) {
+  // gap --vehicle-mass --cg-height --wheelbase holds the declared law in every fit
+  // (Run::declared_load_per_decel_s2_per_m): at a steady deceleration the force is the load
+  // transfer effect's with the same q and ratio; the fifth wheel's derivative noise is read
+  // through a +-20 ms centred mean, so it reaches the force a tenth as strongly.
+  const std::vector<double> tyre{15.0, 1.58, 3400.0, 0.1};
+  gap::Run steady = synthetic_run();
+  steady.bench = can::BenchKind::Ground;
+  steady.ref_decel_mps2.assign(steady.t_s.size(), 6.0);
+  gap::Run noisy = steady;
+  for (std::size_t i = 0; i < noisy.t_s.size(); ++i)
+    noisy.ref_decel_mps2[i] += (i % 2 ? 0.5 : -0.5);
+  const std::vector<double> with_lt{tyre[0], tyre[1], tyre[2], tyre[3], 0.034, 1.25, 0.0};
+  const auto effect = gap::predict(steady, with_lt, {gap::Effect::LoadTransfer});
+  const auto effect_noisy = gap::predict(noisy, with_lt, {gap::Effect::LoadTransfer});
+  for (gap::Run* r : {&steady, &noisy}) {
+    r->declared_load_per_decel_s2_per_m = 0.034;
+    r->declared_kx_load_ratio = 1.25;
+  }
+  const auto held = gap::predict(steady, tyre, {});
+  const auto held_noisy = gap::predict(noisy, tyre, {});
+  const auto bare = gap::predict(synthetic_run(), tyre, {});
+  double off = 0, noise_effect = 0, noise_held = 0, moved = 0;
+  for (std::size_t i = 20; i + 20 < held.size(); ++i) {  // the mean's edges aside
+    off = std::max(off, std::abs(held[i] - effect[i]));
+    noise_effect = std::max(noise_effect, std::abs(effect_noisy[i] - effect[i]));
+    noise_held = std::max(noise_held, std::abs(held_noisy[i] - held[i]));
+    moved = std::max(moved, std::abs(held[i] - bare[i]));
+  }
+  EXPECT_LT(off, 1e-6 * tyre[2]);
+  EXPECT_GT(moved, 0.1 * tyre[2]);  // a fifth more load at 6 m/s^2
+  EXPECT_GT(noise_effect, 10.0);
+  EXPECT_LT(noise_held, 0.1 * noise_effect);
+}
+
 TEST(BenchModel, AGroundWheelsLoadTransferIsUndoneToItsStaticLoad) {
   // A braking car: the deceleration rises with the force, the front wheel's load with it through
   // a pitch lag. predict() makes the force at the moving load; undone, the points lie on the
