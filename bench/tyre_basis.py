@@ -91,13 +91,16 @@ def score(doc, truth_force):
     """{basis: {method: rms % of peak}} for one event over the slip range the tyre was measured
     on (the event's up to the lock-up runaway or a locked wheel), and (basis_event) over the
     event's whole slip range, past the runaway too."""
-    out = {"instrument": {}, "tyre": {}, "instrument_event": {}, "tyre_event": {}}
+    out = {"instrument": {}, "tyre": {}, "instrument_event": {}, "tyre_event": {}, "flagged": {}}
     slip = doc.get("tyre_max_slip_ratio") or doc["max_slip_ratio"]
     out["slip_range"] = slip
     out["event_slip_range"] = doc["max_slip_ratio"]
     for key, basis in (("results", "instrument"), ("tyre_results", "tyre")):
         for r in doc.get(key, []):
             out[basis][r["method"]] = rms_pct_peak(r, truth_force, slip)
+            # A result flagged implausible (an MLP extrapolating, a parameter at its bound...)
+            # is shown with its reason, never as a plain result.
+            out["flagged"][f"{basis} {r['method']}"] = bool(r.get("implausible"))
             out[basis + "_event"][r["method"]] = rms_pct_peak(r, truth_force,
                                                               doc["max_slip_ratio"])
     return out
@@ -218,7 +221,8 @@ def table(title, rows, suffix=""):
         for m in METHODS:
             for basis in ("instrument", "tyre"):
                 v = r[basis + suffix].get(m)
-                cells.append("-" if v is None else f"{v:.2f}")
+                flag = "*" if r["flagged"].get(f"{basis} {m}") else ""
+                cells.append("-" if v is None else f"{v:.2f}{flag}")
         rng = r["event_slip_range" if suffix else "slip_range"]
         print(f"| {r['set']} | {r['model']} | {100 * rng:.1f} | " + " | ".join(cells) + " |")
     summary = {}
@@ -226,15 +230,18 @@ def table(title, rows, suffix=""):
         print(f"\n{bench}:")
         for m in METHODS:
             for basis in ("instrument", "tyre"):
-                v = [r[basis + suffix][m] for r in rows
-                     if r["bench"] == bench and m in r[basis + suffix]]
+                mine = [r for r in rows if r["bench"] == bench and m in r[basis + suffix]]
+                v = [r[basis + suffix][m] for r in mine]
                 if v:
                     within = sum(x <= 2.0 for x in v)
+                    silent = sum(r[basis + suffix][m] > 2.0 and not r["flagged"].get(f"{basis} {m}")
+                                 for r in mine)
                     summary[f"{bench}_{m}_{basis}"] = {
                         "median": statistics.median(v), "max": max(v), "within_2pct": within,
-                        "events": len(v)}
+                        "over_2pct_unflagged": silent, "events": len(v)}
                     print(f"{m:>7} {basis:<10}: median {statistics.median(v):6.2f} %, max "
-                          f"{max(v):6.2f} %, within 2 %: {within}/{len(v)}")
+                          f"{max(v):6.2f} %, within 2 %: {within}/{len(v)}, over 2 % without a "
+                          f"flag: {silent}")
     return summary
 
 
@@ -253,7 +260,8 @@ def main():
     print(f"# bench/tyre_basis.py{args}   (commit {commit})")
     print("RMS distance of each fitted curve from the true curve over the event's slip range, "
           "% of the true peak (raw: the instrument's force; tyre: the bench model's effects "
-          "undone)")
+          "undone; * the result carries an implausibility flag with its reason, as every output "
+          "shows it)")
     doc = {"schema": "brakefit.tyre_basis", "version": 1, "commit": commit}
     with tempfile.TemporaryDirectory() as tmp:
         rec = recordings(brakefit, tmp)
