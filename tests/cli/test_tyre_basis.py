@@ -115,6 +115,18 @@ class TyreBasis(unittest.TestCase):
         self.assertEqual(doc["tyre_results"], [])
         self.assertIn("is of a roller bench and this event of a ground bench", doc["tyre_notes"][0])
 
+    def ground_fits(self, model, pressure):
+        """(ramp, method, by_method's tuple) for each shipped ground run at the tyre pressure
+        ("1p0", "2p2"), replayed with the bench model."""
+        out = []
+        for ramp in (100, 150, 250):
+            log = os.path.join(REC, f"ground_{pressure}bar_{ramp}barps.log")
+            r = run("replay", "--json", "--bench-model", model, log)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            doc = json.loads(r.stdout.splitlines()[0])
+            out += [(ramp, m, v) for m, v in by_method(doc, log).items()]
+        return out
+
     def test_a_ground_model_with_the_car_declared_fits_the_tyre_at_its_static_load(self):
         # The car's load transfer (its mass, centre of gravity and wheelbase, as the recordings'
         # scenario has them) is undone with the bench's effects: the model from the 2.2 bar runs,
@@ -129,15 +141,10 @@ class TyreBasis(unittest.TestCase):
         self.assertIn("# declared from the vehicle: 1300 kg", text)
         self.assertIn("[effects.load_transfer]\ndfz_per_decel_s2_per_m = 0.0336", text)
         self.assertIn("not_held = []", text)
-        for ramp in (100, 150, 250):
-            log = os.path.join(REC, f"ground_1p0bar_{ramp}barps.log")
-            r = run("replay", "--json", "--bench-model", model, log)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            doc = json.loads(r.stdout.splitlines()[0])
-            for method, (raw, tyre, raw_pct, tyre_pct) in by_method(doc, log).items():
-                self.assertLess(tyre_pct, 2.0, (ramp, method, tyre))
-                self.assertGreater(raw_pct, 20.0, (ramp, method, raw))
-                self.assertEqual(tyre["implausible"], [], (ramp, method, tyre))
+        for ramp, method, (raw, tyre, raw_pct, tyre_pct) in self.ground_fits(model, "1p0"):
+            self.assertLess(tyre_pct, 2.0, (ramp, method, tyre))
+            self.assertGreater(raw_pct, 20.0, (ramp, method, raw))
+            self.assertEqual(tyre["implausible"], [], (ramp, method, tyre))
         # The geometry belongs to a ground test, and comes whole.
         roller = [os.path.join(REC, "roller_2p2bar_slow.log")] * 2
         r = run("gap", "--bench-model", model, *car, *roller)
@@ -165,13 +172,8 @@ class TyreBasis(unittest.TestCase):
         self.assertNotIn("wheel_inertia", verdicts[False])
         self.assertIn("wheel_inertia", verdicts[True])
         self.assertNotIn("load_transfer", verdicts[True])  # held, not a candidate
-        for ramp in (100, 150, 250):
-            log = os.path.join(REC, f"ground_2p2bar_{ramp}barps.log")
-            r = run("replay", "--json", "--bench-model", model, log)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            doc = json.loads(r.stdout.splitlines()[0])
-            for method, (_, tyre, _, tyre_pct) in by_method(doc, log).items():
-                self.assertLess(tyre_pct, 2.0, (ramp, method, tyre))
+        for ramp, method, (_, tyre, _, tyre_pct) in self.ground_fits(model, "2p2"):
+            self.assertLess(tyre_pct, 2.0, (ramp, method, tyre))
 
     def test_bad_and_missing_models(self):
         log = os.path.join(REC, "roller_1p0bar_slow.log")
