@@ -227,15 +227,18 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   // state of the relaxation, which needs the force side).
   double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0, cap_n = INFINITY;
   bool relaxation = false, threshold = false;
-  if (const double q = r.declared_load_per_decel_s2_per_m; q != 0 && r.ref_decel_mps2.size() == n) {
-    const std::vector<double> decel =
-        centred_mean(r.t_s, r.ref_decel_mps2, kDeclaredLoadHalfWindowS);
+  // A load following the deceleration a: D by 1 + q a, B C D by (1 + q a)^ratio, E by e q a.
+  auto follow_load = [&](const std::vector<double>& decel, double q, double ratio, double e_slope) {
     for (std::size_t i = 0; i < n; ++i) {
       const double load = std::max(0.05, 1.0 + q * decel[i]);
-      d_scale[i] = load;
-      b_scale[i] = std::pow(load, r.declared_kx_load_ratio - 1.0);
+      d_scale[i] *= load;
+      b_scale[i] *= std::pow(load, ratio - 1.0);
+      e_add[i] += e_slope * (load - 1.0);
     }
-  }
+  };
+  if (const double q = r.declared_load_per_decel_s2_per_m; q != 0 && r.ref_decel_mps2.size() == n)
+    follow_load(centred_mean(r.t_s, r.ref_decel_mps2, kDeclaredLoadHalfWindowS), q,
+                r.declared_kx_load_ratio, 0.0);
   std::size_t next = 4;  // index of the current effect's first parameter in p
   for (const Effect effect : effects) {
     const double q = p[next];
@@ -264,21 +267,11 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
         break;
       case Effect::LoadTransfer:
       case Effect::LoadTransferShape:
-      case Effect::LoadTransferMeasured: {  // Fz grows with the measured deceleration: D by
-                                            // 1 + q a, B C D by (1 + q a)^r, E by e q a
-        const double ratio =
-            effect == Effect::LoadTransferMeasured ? kPublishedKxLoadRatio : p[first + 1];
-        const double e_slope = effect == Effect::LoadTransferShape ? p[first + 2] : 0.0;
-        const std::vector<double> decel =
-            pitch_lagged_decel(r, p[first + effect_params(effect).size() - 1]);
-        for (std::size_t i = 0; i < n; ++i) {
-          const double load = std::max(0.05, 1.0 + q * decel[i]);
-          d_scale[i] *= load;
-          b_scale[i] *= std::pow(load, ratio - 1.0);
-          e_add[i] += e_slope * (load - 1.0);
-        }
+      case Effect::LoadTransferMeasured:  // Fz grows with the measured deceleration
+        follow_load(pitch_lagged_decel(r, p[first + effect_params(effect).size() - 1]), q,
+                    effect == Effect::LoadTransferMeasured ? kPublishedKxLoadRatio : p[first + 1],
+                    effect == Effect::LoadTransferShape ? p[first + 2] : 0.0);
         break;
-      }
       case Effect::SpeedFriction:  // lambda_mu* = 1 / (1 + LMUV Vs / V0), Vs = slip * V
         for (std::size_t i = 0; i < n; ++i) {
           const double mu = 1.0 / (1.0 + q * std::abs(r.slip[i]) * r.v_ref_mps[i] / kLongVl);
