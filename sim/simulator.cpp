@@ -13,7 +13,8 @@ namespace brakefit::sim {
 namespace {
 
 constexpr std::int64_t kLogEpochUs = 1700000000LL * 1000000LL;  // recordings start 2023-11-14
-constexpr double kNegligibleInertia = 0.05;                     // kg m^2, "wheel_inertia = false"
+constexpr int kLoadTransferIterations = 4;   // Fz = W + g F: a contraction while g dF/dFz < 1
+constexpr double kNegligibleInertia = 0.05;  // kg m^2, "wheel_inertia = false"
 constexpr double kIdealPpr = 1e6;
 
 /// Quadrature encoder after x4 decoding: cumulative count and the time of the last edge.
@@ -91,7 +92,7 @@ SimResult simulate(const Scenario& s) {
   double v_vehicle = v0;       // ground
   double omega_w = v0 / rw;
   double kappa_t = 0.0;  // transient slip (relaxation)
-  double p_sensor = 0.0, motor_integral = 0.0, tester_force = 0.0, decel = 0.0;
+  double p_sensor = 0.0, motor_integral = 0.0, tester_force = 0.0;
   const double counts_per_rev = 4.0 * ppr;
   Encoder enc_ref{counts_per_rev / (2 * M_PI)}, enc_wheel{counts_per_rev / (2 * M_PI)};
   std::deque<double> pressure_history;  // for the channel time offset
@@ -123,9 +124,6 @@ SimResult simulate(const Scenario& s) {
     const double v_wheel = omega_w * rw;
     const double kappa = v_ref > 0.05 ? std::clamp((v_ref - v_wheel) / v_ref, -1.0, 1.0)
                                       : (v_wheel < v_ref ? 1.0 : 0.0);
-    if (!roller && e.load_transfer)
-      tyre_state.fz_n =
-          s.wheel_load_n + s.vehicle_mass_kg * decel * s.cg_height_m / s.wheelbase_m / 2.0;
     tyre_state.slip_speed_mps = std::abs(kappa_t) * v_ref;
     // Relaxation: sigma dk'/dt + V k' = V k, implicit in k'.
     const double a = e.relaxation_length_m > 0 ? dt * v_ref / e.relaxation_length_m : INFINITY;
@@ -135,13 +133,36 @@ SimResult simulate(const Scenario& s) {
     // braking force stays at that cap, whatever the friction (physics.md section 3).
     const double cap_n =
         roller && e.cradle_cap_ratio > 0 ? e.cradle_cap_ratio * s.wheel_load_n : INFINITY;
+    // Load transfer: the wheel's load follows the deceleration its own force causes,
+    // Fz = W + g F. Solved within the step: a load one step behind its force is an explicit
+    // loop that rings with a light wheel and a relaxation length (it vanishes as dt shrinks).
+    const double load_per_force = !roller && e.load_transfer
+                                      ? s.cg_height_m / s.wheelbase_m / 2.0 / s.wheel_brake_share
+                                      : 0.0;
+    if (load_per_force > 0)
+      for (int k = 0; k < kLoadTransferIterations; ++k)
+        tyre_state.fz_n =
+            s.wheel_load_n +
+            load_per_force * std::max(0.0, braking_force(s.tyre, tyre_state, kappa_new));
     const double tyre_force = braking_force(s.tyre, tyre_state, kappa_new);
     const double force = std::min(tyre_force, cap_n);
     constexpr double h = 1e-6;
-    const double dF_dk = tyre_force >= cap_n ? 0.0
-                                             : (braking_force(s.tyre, tyre_state, kappa_new + h) -
-                                                braking_force(s.tyre, tyre_state, kappa_new - h)) /
-                                                   (2 * h);
+    double dF_dk = tyre_force >= cap_n ? 0.0
+                                       : (braking_force(s.tyre, tyre_state, kappa_new + h) -
+                                          braking_force(s.tyre, tyre_state, kappa_new - h)) /
+                                             (2 * h);
+    if (load_per_force > 0 && tyre_force < cap_n) {
+      // The slip's change moves the load too: dF/dk (1 + g dF/dFz + ...).
+      TyreState up = tyre_state, down = tyre_state;
+      const double dfz = 1e-3 * s.wheel_load_n;
+      up.fz_n += dfz;
+      down.fz_n -= dfz;
+      const double loop =
+          load_per_force *
+          (braking_force(s.tyre, up, kappa_new) - braking_force(s.tyre, down, kappa_new)) /
+          (2 * dfz);
+      if (loop < 0.9) dF_dk /= 1.0 - loop;
+    }
     const double dF_domega = v_ref > 0.05 ? dF_dk * w * (-rw / v_ref) : 0.0;
     const double tb = s.brake_gain_nm_per_bar * std::max(0.0, p_line - e.brake_threshold_bar);
     // Wheel: I w' = F R - Tb, linearly implicit in w (stable for stiff tyres), locked at 0.
@@ -163,7 +184,7 @@ SimResult simulate(const Scenario& s) {
                          ? tester_force + dt / e.tester_force_lag_s * (force - tester_force)
                          : force;
     } else {
-      decel = std::max(0.0, force / (s.wheel_brake_share * s.vehicle_mass_kg));
+      const double decel = std::max(0.0, force / (s.wheel_brake_share * s.vehicle_mass_kg));
       v_vehicle = std::max(0.0, v_vehicle - dt * decel);
     }
     enc_ref.advance(roller ? omega_r : v_vehicle / s.fifth_wheel_radius_m, t, dt);
