@@ -38,13 +38,15 @@ void add_train_command(CLI::App& app) {
     const std::string text = serialize_model(m);
     write_file(opts->out, text);
     std::cout << fmt::format(
-        "model {}\n  hash {}\n  SOM qe {:.5f} te {:.4f}, {} of {} units labelled\n  MLP {} epochs "
-        "(best {}), "
-        "validation mse {:.5f}{}\n",
+        "model {}\n  hash {}\n  SOM qe {:.5f} te {:.4f}, {} of {} units labelled\n  MLP: {} "
+        "network{}\n",
         opts->out, m.hash, m.som_qe, m.som_te,
         std::count_if(m.unit_hits.begin(), m.unit_hits.end(), [](std::size_t h) { return h > 0; }),
-        m.unit_hits.size(), m.mlp_report.epochs, m.mlp_report.best_epoch,
-        m.mlp_report.validation_mse, m.mlp_report.early_stopped ? " (early stopped)" : "");
+        m.unit_hits.size(), m.mlp.size(), m.mlp.size() == 1 ? "" : "s");
+    for (const auto& r : m.mlp_report)
+      std::cout << fmt::format("    {} epochs (best {}), validation mse {:.5f}{}\n", r.epochs,
+                               r.best_epoch, r.validation_mse,
+                               r.early_stopped ? " (early stopped)" : "");
   });
 }
 

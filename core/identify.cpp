@@ -141,7 +141,9 @@ std::vector<std::string> mlp_estimate_outside_training(const Model& m, const MfP
 MfParams identify_mlp(const Model& m, const Curve& c) {
   const GridCurve g = resample_to_grid(c, m.grid);
   const Eigen::MatrixXd x = m.mlp_in.apply(mlp_features(g, m.grid));
-  const Eigen::MatrixXd y = m.mlp_out.invert(m.mlp.predict(x));
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(1, 3);
+  for (const auto& net : m.mlp) y += m.mlp_out.invert(net.predict(x));
+  y /= static_cast<double>(m.mlp.size());
   MfParams p;
   p.B = std::exp(y(0, 0));
   p.C = y(0, 1);

@@ -23,10 +23,13 @@ struct Model {
   std::vector<MfParams> unit_labels;   ///< mean parameters of those curves (valid where hits > 0)
   double som_qe = 0.0;
   double som_te = 0.0;
-  mlp::Network mlp;
+  /// The MLP: an ensemble of networks on one input and output scaling, trained alike from their
+  /// own seeds; its estimate is their mean (one network's estimate varies with its seed by more
+  /// than the ensemble's does).
+  std::vector<mlp::Network> mlp;
   mlp::Scaler mlp_in;
   mlp::Scaler mlp_out;
-  mlp::TrainReport mlp_report;
+  std::vector<mlp::TrainReport> mlp_report;  ///< one per network
   std::string hash;  ///< "sha256:..." of the serialised model (set by save/load)
 };
 

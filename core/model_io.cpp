@@ -50,9 +50,19 @@ json body_of(const Model& m) {
   som["qe"] = m.som_qe;
   som["te"] = m.som_te;
   json mlp;
-  mlp["layers"] = m.mlp.layers();
-  const Eigen::VectorXd w = m.mlp.parameters();
-  mlp["parameters"] = std::vector<double>(w.data(), w.data() + w.size());
+  mlp["layers"] = m.mlp.front().layers();
+  json nets = json::array();
+  for (std::size_t k = 0; k < m.mlp.size(); ++k) {
+    const Eigen::VectorXd w = m.mlp[k].parameters();
+    const mlp::TrainReport& r = m.mlp_report[k];
+    nets.push_back({{"parameters", std::vector<double>(w.data(), w.data() + w.size())},
+                    {"report",
+                     {{"epochs", r.epochs},
+                      {"best_epoch", r.best_epoch},
+                      {"train_mse", r.train_mse},
+                      {"validation_mse", r.validation_mse},
+                      {"early_stopped", r.early_stopped}}}});
+  }
   auto vec = [](const Eigen::RowVectorXd& v) {
     return std::vector<double>(v.data(), v.data() + v.size());
   };
@@ -60,11 +70,7 @@ json body_of(const Model& m) {
   mlp["input_scale"] = vec(m.mlp_in.scale);
   mlp["output_mean"] = vec(m.mlp_out.mean);
   mlp["output_scale"] = vec(m.mlp_out.scale);
-  mlp["report"] = {{"epochs", m.mlp_report.epochs},
-                   {"best_epoch", m.mlp_report.best_epoch},
-                   {"train_mse", m.mlp_report.train_mse},
-                   {"validation_mse", m.mlp_report.validation_mse},
-                   {"early_stopped", m.mlp_report.early_stopped}};
+  mlp["networks"] = nets;
   json body;
   body["schema"] = kModelSchema;
   body["format_version"] = kModelFormatVersion;
@@ -167,14 +173,29 @@ Model deserialize_model(std::string_view text, const std::string& source) {
       throw fail("MLP layer sizes do not match the slip grid and the 3 outputs");
     for (auto l : layers)
       if (l < 1 || l > 4096) throw fail("MLP layer of 0 or more than 4096 units");
-    m.mlp = mlp::Network(layers, 0);
-    const auto w = n.at("parameters").get<std::vector<double>>();
-    if (w.size() != m.mlp.parameter_count())
-      throw fail("MLP parameter count does not match its layers");
-    if (!std::all_of(w.begin(), w.end(), [](double v) { return std::isfinite(v); }))
-      throw fail("MLP parameter is not finite");
-    m.mlp.set_parameters(
-        Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())));
+    // An ensemble ("networks") or, as models of one network were written, its fields in "mlp".
+    const json nets = n.contains("networks") ? n.at("networks") : json::array({n});
+    if (!nets.is_array() || nets.empty() || nets.size() > 64)
+      throw fail("MLP networks: expected an array of 1 to 64 networks");
+    for (const json& one : nets) {
+      mlp::Network net(layers, 0);
+      const auto w = one.at("parameters").get<std::vector<double>>();
+      if (w.size() != net.parameter_count())
+        throw fail("MLP parameter count does not match its layers");
+      if (!std::all_of(w.begin(), w.end(), [](double v) { return std::isfinite(v); }))
+        throw fail("MLP parameter is not finite");
+      net.set_parameters(
+          Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())));
+      m.mlp.push_back(std::move(net));
+      const json& r = one.at("report");
+      mlp::TrainReport rep;
+      rep.epochs = r.at("epochs").get<std::size_t>();
+      rep.best_epoch = r.at("best_epoch").get<std::size_t>();
+      rep.train_mse = r.at("train_mse").get<double>();
+      rep.validation_mse = r.at("validation_mse").get<double>();
+      rep.early_stopped = r.at("early_stopped").get<bool>();
+      m.mlp_report.push_back(rep);
+    }
     m.mlp_in = {row_from(n.at("input_mean").get<std::vector<double>>()),
                 row_from(n.at("input_scale").get<std::vector<double>>())};
     m.mlp_out = {row_from(n.at("output_mean").get<std::vector<double>>()),
@@ -183,12 +204,6 @@ Model deserialize_model(std::string_view text, const std::string& source) {
         m.mlp_in.scale.size() != m.mlp_in.mean.size() || m.mlp_out.mean.size() != 3 ||
         m.mlp_out.scale.size() != 3)
       throw fail("MLP scaler sizes do not match the network");
-    const json& r = n.at("report");
-    m.mlp_report.epochs = r.at("epochs").get<std::size_t>();
-    m.mlp_report.best_epoch = r.at("best_epoch").get<std::size_t>();
-    m.mlp_report.train_mse = r.at("train_mse").get<double>();
-    m.mlp_report.validation_mse = r.at("validation_mse").get<double>();
-    m.mlp_report.early_stopped = r.at("early_stopped").get<bool>();
   } catch (const json::exception& e) {
     throw fail(fmt::format("model is missing or has a malformed field: {}", e.what()));
   }

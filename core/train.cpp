@@ -1,6 +1,8 @@
 #include "core/train.hpp"
 
 #include <cmath>
+#include <future>
+#include <utility>
 
 #include "core/rng.hpp"
 
@@ -98,11 +100,26 @@ Model train_model(const TrainConfig& c, const TrainProgress& progress) {
   std::vector<std::size_t> layers{static_cast<std::size_t>(g + 1)};
   layers.insert(layers.end(), c.mlp.hidden.begin(), c.mlp.hidden.end());
   layers.push_back(3);
-  m.mlp = mlp::Network(layers, c.mlp.seed);
-  m.mlp_report = mlp::train(m.mlp, m.mlp_in.apply(x), m.mlp_out.apply(y), c.mlp,
-                            [&](std::size_t e, std::size_t total, double tr, double) {
-                              if (progress) progress("mlp", e, total, tr);
-                            });
+  const Eigen::MatrixXd xs = m.mlp_in.apply(x), ys = m.mlp_out.apply(y);
+  // The ensemble's networks differ only in their seeds (weights and validation split); each is
+  // trained on its own thread and reproducibly, whatever the threads. The first reports progress.
+  std::vector<std::future<std::pair<mlp::Network, mlp::TrainReport>>> jobs;
+  for (std::size_t k = 0; k < c.mlp_ensemble; ++k)
+    jobs.push_back(std::async(std::launch::async, [&, k] {
+      mlp::TrainSettings s = c.mlp;
+      s.seed = c.mlp.seed + k;
+      mlp::Network net(layers, s.seed);
+      mlp::TrainReport r =
+          mlp::train(net, xs, ys, s, [&](std::size_t e, std::size_t total, double tr, double) {
+            if (progress && k == 0) progress("mlp", e, total, tr);
+          });
+      return std::pair{std::move(net), r};
+    }));
+  for (auto& j : jobs) {
+    auto [net, r] = j.get();
+    m.mlp.push_back(std::move(net));
+    m.mlp_report.push_back(r);
+  }
   return m;
 }
 

@@ -95,9 +95,10 @@ TrainConfig parse_train_config(std::string_view text, const std::string& source)
   }
   if (const auto* m = root.get_as<toml::table>("mlp")) {
     const std::string p = "mlp.";
-    rd.check_keys(*m, p,
-                  {"hidden", "trainer", "max_epochs", "validation_fraction", "patience",
-                   "learning_rate", "momentum", "truncate_fraction", "truncate_range", "seed"});
+    rd.check_keys(
+        *m, p,
+        {"hidden", "trainer", "max_epochs", "validation_fraction", "patience", "learning_rate",
+         "momentum", "truncate_fraction", "truncate_range", "seed", "ensemble"});
     if (const auto* h = m->get("hidden")) {
       const auto* arr = h->as_array();
       if (!arr || arr->empty()) rd.fail(p + "hidden", "expected a non-empty array of layer sizes");
@@ -124,6 +125,7 @@ TrainConfig parse_train_config(std::string_view text, const std::string& source)
       c.mlp_truncate_max_ratio = r.hi;
     }
     c.mlp.seed = static_cast<std::uint64_t>(rd.integer(*m, p, "seed", 2, 0, INT64_MAX));
+    c.mlp_ensemble = static_cast<std::size_t>(rd.integer(*m, p, "ensemble", 5, 1, 64));
   }
   return c;
 }
@@ -162,9 +164,9 @@ std::string format_train_config(const TrainConfig& c) {
       n.patience);
   s += fmt::format(
       "learning_rate = {}\nmomentum = {}\ntruncate_fraction = {}\ntruncate_range = [{}, {}]\nseed "
-      "= {}\n",
+      "= {}\nensemble = {}\n",
       n.learning_rate, n.momentum, c.mlp_truncate_fraction, c.mlp_truncate_min_ratio,
-      c.mlp_truncate_max_ratio, n.seed);
+      c.mlp_truncate_max_ratio, n.seed, c.mlp_ensemble);
   // Integers that look like floats must stay floats in TOML ("weight = 1" would re-parse as an
   // integer, which is accepted for numbers), so nothing more is needed here.
   return s;

@@ -22,8 +22,9 @@ struct TrainConfig {
   SomInput som_input = SomInput::Shape;
   mlp::TrainSettings mlp;
   double mlp_truncate_fraction = 0.5;    ///< share of MLP training curves cut short (roller tests)
-  double mlp_truncate_min_ratio = 0.08;  ///< cut slip range for those curves
+  double mlp_truncate_min_ratio = 0.04;  ///< cut slip range for those curves
   double mlp_truncate_max_ratio = 0.6;
+  std::size_t mlp_ensemble = 5;  ///< networks in the MLP, seeds mlp.seed, mlp.seed + 1, ...
 };
 
 /// Throws InputError "SOURCE: key 'a.b': ..." or "SOURCE:LINE:COL: ..." for TOML syntax errors.
