@@ -92,6 +92,10 @@ BenchModel bench_model_from(const Report& rep, Condition c) {
     b.effect = e;
     b.value = rep.after.params.at(first);
     b.stderr_ = first < rep.after.stderr_.size() ? rep.after.stderr_[first] : NAN;
+    // The runs' disagreement where it is larger than the fit's own error (fold_spread).
+    if (first < rep.after_spread.size() && std::isfinite(rep.after_spread[first]))
+      b.stderr_ = std::isfinite(b.stderr_) ? std::max(b.stderr_, rep.after_spread[first])
+                                           : rep.after_spread[first];
     for (std::size_t j = first + 1; j < at; ++j) b.more.push_back(rep.after.params.at(j));
     if (e == Effect::LoadTransfer) hold_measured_load_transfer(rep, b);
     m.effects.push_back(b);

@@ -210,6 +210,10 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         "like it (checked here: its stiffness ratio is inside its range); roller runs without "
         "deceleration (--roller/--road) separate the two");
   if (std::string note = borrowed_noise_note(rep.floor); !note.empty()) rep.notes.push_back(note);
+  // (With a cap found from the runaway the fits are of the runs below it: no spread is given.)
+  if (!cap && std::any_of(rep.accepted.begin(), rep.accepted.end(),
+                          [](Effect e) { return !is_nuisance(e); }))
+    rep.after_spread = fold_spread(runs, rep.accepted, fit);
   return rep;
 }
 

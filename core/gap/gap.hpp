@@ -295,6 +295,10 @@ struct Report {
   double noise_n = 0.0;  ///< the floor: force noise and slip noise through the slope (floor)
   Floor floor;
   Fit before, after;
+  /// after.params' spread between the runs: each held-out fold left out and the model refitted,
+  /// a jackknife standard error per parameter (empty with fewer than three runs). The bench
+  /// model's standard errors take it where it exceeds the fit's own (after.stderr_).
+  std::vector<double> after_spread;
   std::vector<std::string> notes;
   /// A force cap found on the runs (roller cradle): from the runaway at one force, or the fitted
   /// cradle_cap effect; NaN when none.

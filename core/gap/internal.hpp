@@ -218,6 +218,13 @@ inline constexpr std::size_t kMaxFolds = 6;
 /// Held-out error: RMS over runs of each run's RMSE with parameters fitted on the runs outside its
 /// fold (one run per fold up to kMaxFolds runs, blocks of consecutive runs past that).
 double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects, const Fitter& fit);
+/// Fewer held-out folds than this: no spread is given (two fits say little about a spread).
+inline constexpr std::size_t kMinSpreadFolds = 3;
+/// The parameters' spread between the held-out folds (each fold left out and the model refitted):
+/// a delete-a-group jackknife standard error per parameter; empty below kMinSpreadFolds folds
+/// (fold_spread.cpp).
+std::vector<double> fold_spread(const std::vector<Run>& runs, const std::vector<Effect>& effects,
+                                const Fitter& fit);
 std::vector<const Run*> pointers(const std::vector<Run>& runs);
 /// Where: residual of the 4-parameter model by slip region, by phase, by run.
 std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params,

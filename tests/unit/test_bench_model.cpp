@@ -257,6 +257,13 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   EXPECT_EQ(m.effects[1].effect, gap::Effect::WheelInertia);
   EXPECT_DOUBLE_EQ(m.effects[1].value, 0.9);
   EXPECT_EQ(m.not_held, std::vector<std::string>{"load_transfer"});
+  // Where the runs disagree more than the fit's own error says (the folds' spread), the standard
+  // error is the spread; where less, the fit's.
+  gap::Report spread = rep;
+  spread.after_spread = {0, 0, 0, 0, 0, 0.04, 0, 0, 0, 0.01};
+  const gap::BenchModel s = gap::bench_model_from(spread, gap::Condition::Roller);
+  EXPECT_DOUBLE_EQ(s.effects[0].stderr_, 0.04);
+  EXPECT_DOUBLE_EQ(s.effects[1].stderr_, 0.05);
   // On the ground it is the vehicle's, undone with its ratio and lag: the tyre at its static load.
   const gap::BenchModel g = gap::bench_model_from(rep, gap::Condition::Ground);
   ASSERT_EQ(g.effects.size(), 3u);

@@ -149,6 +149,14 @@ TEST(Gap, BrakeThresholdIsFoundWithItsMagnitude) {
   }
   EXPECT_LT(r.gap_after_rmse_n, 0.15 * r.gap_before_rmse_n);
   EXPECT_LT(r.gap_after_rmse_n, 1.2 * r.noise_n);
+  // The runs' spread of every parameter of the model named: three folds, each left out.
+  ASSERT_EQ(r.after_spread.size(), r.after.params.size());
+  const auto names = gap::param_names(r.accepted);
+  const auto p0 =
+      static_cast<std::size_t>(std::find(names.begin(), names.end(), "p0_bar") - names.begin());
+  ASSERT_LT(p0, r.after_spread.size());
+  EXPECT_GT(r.after_spread[p0], 0.0);
+  EXPECT_LT(r.after_spread[p0], 0.25);  // bar: the three ramps agree on one dead zone
 }
 
 TEST(Gap, ACradleCapIsFoundFromTheRunawayOrFittedWithTheWheelInertia) {
