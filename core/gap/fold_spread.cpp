@@ -17,11 +17,8 @@ std::vector<double> fold_spread(const std::vector<Run>& runs, const std::vector<
   if (folds < kMinSpreadFolds) return {};
   std::vector<std::vector<double>> fitted;
   for (std::size_t k = 0; k < folds; ++k) {
-    const std::size_t lo = k * n / folds, hi = (k + 1) * n / folds;
-    std::vector<const Run*> train;
-    for (std::size_t i = 0; i < n; ++i)
-      if (i < lo || i >= hi) train.push_back(&runs[i]);
-    fitted.push_back(fit(train, effects).params);
+    std::size_t lo = 0, hi = 0;
+    fitted.push_back(fit(fold_training(runs, k, lo, hi), effects).params);
   }
   const auto g = static_cast<double>(folds);
   std::vector<double> se(fitted.front().size(), 0.0);

@@ -218,6 +218,10 @@ inline constexpr std::size_t kMaxFolds = 6;
 /// Held-out error: RMS over runs of each run's RMSE with parameters fitted on the runs outside its
 /// fold (one run per fold up to kMaxFolds runs, blocks of consecutive runs past that).
 double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects, const Fitter& fit);
+/// The runs a held-out fold is fitted on: all but fold k's (heldout's folds: one run each up to
+/// kMaxFolds runs, blocks of consecutive runs past that); [lo, hi) are the held-out runs.
+std::vector<const Run*> fold_training(const std::vector<Run>& runs, std::size_t k, std::size_t& lo,
+                                      std::size_t& hi);
 /// Fewer held-out folds than this: no spread is given (two fits say little about a spread).
 inline constexpr std::size_t kMinSpreadFolds = 3;
 /// The parameters' spread between the held-out folds (each fold left out and the model refitted):
