@@ -4,13 +4,15 @@
 //              [--effect2 E --magnitude2 X]   (a second effect in the same set: a pair)
 //              [--seed N] [--ripple R] [--speed-step MPS] [--pressure-filter S]
 //              [--pressure-step BAR] [--pressure-noise BAR] [--jitter RATIO] [--ripple-ref R]
-//              [--pitch-lag S] [--truth-curve FILE] [--stations cars|every] --out DIR
+//              [--pitch-lag S | --pitch-hz F [--pitch-damping Z]] [--truth-curve FILE]
+//              [--stations cars|every] --out DIR
 // --stations every draws from every export stations make (50-1000 Hz, 2-6 runs, 2-6 km/h rollers
 // that droop, heavy vehicles, ground runs at 30-130 km/h); cars (the default) as the referee's
 // first draws. The optional overrides replace the drawn tester export (R: both encoders' relative
-// ripple). Prints the drawn tyre, the truth magnitude and the files written. --truth-curve writes
-// the tyre's steady-state curve at the set's load and pressure (slip,force_n, slip 0 to 1): what a
-// fit on the tyre's basis should find, with the instrument's effects undone.
+// ripple) or the drawn body pitch (a lag, or a damped mode of F Hz). Prints the drawn tyre, the
+// truth magnitude and the files written. --truth-curve writes the tyre's steady-state curve at the
+// set's load and pressure (slip,force_n, slip 0 to 1): what a fit on the tyre's basis should find,
+// with the instrument's effects undone.
 #include <fmt/format.h>
 
 #include <cstdlib>
@@ -29,7 +31,8 @@ int main(int argc, char** argv) {
   double magnitude = 0, magnitude2 = 0;
   std::uint64_t seed = 1;
   double ripple = -1, speed_step = -1, pressure_filter = -1, pressure_step = -1, jitter = -1,
-         ripple_ref = -1, pressure_noise = -1, pitch_lag = -1;  // < 0: as drawn
+         ripple_ref = -1, pressure_noise = -1, pitch_lag = -1, pitch_hz = -1,
+         pitch_damping = -1;  // < 0: as drawn
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--bench")
@@ -62,6 +65,10 @@ int main(int argc, char** argv) {
       out = v;
     else if (k == "--pitch-lag")
       pitch_lag = std::atof(v.c_str());
+    else if (k == "--pitch-hz")
+      pitch_hz = std::atof(v.c_str());
+    else if (k == "--pitch-damping")
+      pitch_damping = std::atof(v.c_str());
     else if (k == "--stations")
       stations = v;
     else if (k == "--truth-curve")
@@ -91,7 +98,15 @@ int main(int argc, char** argv) {
       if (pressure_step >= 0) r.tester.pressure_step_bar = pressure_step;
       if (jitter >= 0) r.tester.jitter_ratio = jitter;
       if (pressure_noise >= 0) r.tester.pressure_noise_bar = pressure_noise;
-      if (pitch_lag >= 0) r.pitch_lag_s = pitch_lag;
+      if (pitch_lag >= 0) {
+        r.pitch_lag_s = pitch_lag;
+        r.pitch_hz = 0;
+      }
+      if (pitch_hz >= 0) {
+        r.pitch_hz = pitch_hz;
+        r.pitch_lag_s = 0;
+      }
+      if (pitch_damping >= 0) r.pitch_damping = pitch_damping;
     }
     std::filesystem::create_directories(out);
     std::cout << fmt::format("tyre {} Fz {:.0f} N, {:.2f} bar; effect {} magnitude {:.4g}\n",
@@ -101,6 +116,12 @@ int main(int argc, char** argv) {
       std::cout << fmt::format("second effect {} magnitude {:.4g}\n", effect2,
                                set.magnitudes.back());
     std::cout << "station: " << set.station << "\n";
+    if (bench == "ground" && (pitch_lag >= 0 || pitch_hz >= 0 || pitch_damping >= 0)) {
+      const auto& r = set.runs.front();
+      std::cout << (r.pitch_hz > 0 ? fmt::format("pitch (given): mode {:g} Hz damping {:g}\n",
+                                                 r.pitch_hz, r.pitch_damping)
+                                   : fmt::format("pitch (given): lag {:g} s\n", r.pitch_lag_s));
+    }
     const auto& tx = set.runs.front().tester;
     std::cout << fmt::format(
         "export: speed step {:.2g} m/s, ripple wheel {:.2g} reference {:.2g}, pressure filter "

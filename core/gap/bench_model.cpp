@@ -24,16 +24,17 @@ void sort_effects(BenchModel& m) {
 void hold_measured_load_transfer(const Report& rep, BenchEffect& b) {
   for (const auto& sc : rep.effects) {
     if (sc.effect != Effect::LoadTransfer || !sc.accepted) continue;
-    const auto ps = effect_params(Effect::LoadTransfer);  // magnitude, ratio, pitch lag
-    double q = NAN, lag_s = 0.0;
+    const auto ps = effect_params(Effect::LoadTransfer);  // magnitude, ratio, pitch lag, mode
+    double q = NAN, lag_s = 0.0, mode_s2 = 0.0;
     for (const auto& [name, v] : sc.params) {
       if (name == ps[0].name) q = v;
       if (name == ps[2].name) lag_s = v;
+      if (name == ps[3].name) mode_s2 = v;
     }
     if (!std::isfinite(q)) return;
     b.value = q;
     b.stderr_ = NAN;  // the free fit's covariance is not this magnitude's
-    b.more = {kPublishedKxLoadRatio, lag_s};
+    b.more = {kPublishedKxLoadRatio, lag_s, mode_s2};
     b.origin =
         "measured by the diagnosis, the slip stiffness's load ratio held at the published "
         "tyres'";
@@ -66,7 +67,7 @@ BenchEffect declared_load_transfer(double vehicle_mass_kg, double cg_height_m, d
   b.effect = Effect::LoadTransfer;
   b.value = dfz_per_fz * kPublishedPeakLoadExponent;
   b.stderr_ = NAN;
-  b.more = {kPublishedKxLoadRatio, 0.0};
+  b.more = {kPublishedKxLoadRatio, 0.0, 0.0};
   b.origin = fmt::format(
       "declared from the vehicle: {:.0f} kg, centre of gravity {:.3f} m high, wheelbase {:.3f} m, "
       "{} axle, wheel load {:.0f} N: dFz/Fz {:.4g} per m/s^2, D by {:.2f} of it (published tyres' "
@@ -174,9 +175,10 @@ BenchModel parse_bench_model(std::string_view text, const std::string& source) {
     b.effect = e;
     b.value = rd.number(et, prefix, ps[0].name, 0.0, ps[0].lo, ps[0].hi);
     b.stderr_ = rd.number(et, prefix, err.c_str(), NAN, 0.0, 1e9);
-    if (e == Effect::LoadTransfer)  // optional: the published ratio, no lag
+    if (e == Effect::LoadTransfer)  // optional: the published ratio, no lag, no pitch mode
       b.more = {rd.number(et, prefix, ps[1].name, kPublishedKxLoadRatio, ps[1].lo, ps[1].hi),
-                rd.number(et, prefix, ps[2].name, 0.0, ps[2].lo, ps[2].hi)};
+                rd.number(et, prefix, ps[2].name, 0.0, ps[2].lo, ps[2].hi),
+                rd.number(et, prefix, ps[3].name, 0.0, ps[3].lo, ps[3].hi)};
     m.effects.push_back(b);
   }
   sort_effects(m);
@@ -186,7 +188,7 @@ BenchModel parse_bench_model(std::string_view text, const std::string& source) {
 TyrePoints tyre_points(const Run& r, const BenchModel& m) {
   const std::size_t n = r.t_s.size();
   double sigma_m = 0, dt_s = 0, inertia = 0, p0_bar = 0, offset = 0;
-  double load_q = 0, load_ratio = kPublishedKxLoadRatio, pitch_lag_s = 0;
+  double load_q = 0, load_ratio = kPublishedKxLoadRatio, pitch_lag_s = 0, pitch_mode_s2 = 0;
   for (const auto& e : m.effects) {
     if (e.effect == Effect::LoadTransfer) {
       load_q = e.value;
@@ -194,6 +196,7 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
         load_ratio = e.more[0];
         pitch_lag_s = e.more[1];
       }
+      if (e.more.size() >= 3) pitch_mode_s2 = e.more[2];
     }
     if (e.effect == Effect::RelaxationLength) sigma_m = e.value;
     if (e.effect == Effect::TimeOffset) dt_s = e.value;
@@ -214,7 +217,7 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
   // The wheel's load relative to its static one, as predict() has it.
   std::vector<double> load(n, 1.0);
   if (load_q != 0) {
-    const std::vector<double> decel = pitch_lagged_decel(r, pitch_lag_s);
+    const std::vector<double> decel = pitch_lagged_decel(r, pitch_lag_s, pitch_mode_s2);
     for (std::size_t i = 0; i < n; ++i) load[i] = std::max(0.05, 1.0 + load_q * decel[i]);
   }
   for (std::size_t i = 0; i < n; ++i) {

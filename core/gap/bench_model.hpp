@@ -19,7 +19,8 @@ struct BenchEffect {
   double value = 0.0;    ///< in the effect's parameter unit (effect_param(effect).name)
   double stderr_ = 0.0;  ///< its standard error from the diagnosis's fit (0: not known)
   /// The effect's further parameters, in effect_params' order: load transfer's kx_load_ratio and
-  /// pitch_lag_s (empty: none, or their defaults, the published tyres' ratio and no lag).
+  /// pitch_lag_s and pitch_mode_s2 (empty: none, or their defaults, the published tyres' ratio,
+  /// no lag and no pitch mode).
   std::vector<double> more;
   std::string origin;  ///< where the values come from, written as a comment (empty: the diagnosis)
 };

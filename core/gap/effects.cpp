@@ -61,14 +61,20 @@ std::span<const EffectParam> effect_params(Effect e) {
   static const std::array<std::vector<EffectParam>, kEffects> table = [] {
     std::array<std::vector<EffectParam>, kEffects> t;
     for (std::size_t i = 0; i < kEffects; ++i) t[i] = {effect_param(static_cast<Effect>(i))};
+    // The body's pitch: the load follows the deceleration through m x'' + lag x' + x = a, m the
+    // pitch mode's 1 / w^2 (0: a first-order lag; 0.1 s^2: a mode of 0.5 Hz).
     constexpr EffectParam kPitchLag{"pitch_lag_s", 0.0, 0.3, 0.05, true};
+    constexpr EffectParam kPitchMode{"pitch_mode_s2", 0.0, 0.1, 0.0, true};
     t[static_cast<std::size_t>(Effect::LoadTransfer)].push_back({"kx_load_ratio", 0.0, 3.0, 1.0});
     t[static_cast<std::size_t>(Effect::LoadTransfer)].push_back(kPitchLag);
+    t[static_cast<std::size_t>(Effect::LoadTransfer)].push_back(kPitchMode);
     t[static_cast<std::size_t>(Effect::LoadTransferMeasured)].push_back(kPitchLag);
+    t[static_cast<std::size_t>(Effect::LoadTransferMeasured)].push_back(kPitchMode);
     auto& shape = t[static_cast<std::size_t>(Effect::LoadTransferShape)];
     shape.push_back({"kx_load_ratio", 0.0, 3.0, 1.0});
     shape.push_back({"e_per_load", -2.0, 2.0, 0.0});
     shape.push_back(kPitchLag);
+    shape.push_back(kPitchMode);
     return t;
   }();
   return table[static_cast<std::size_t>(e)];
@@ -129,13 +135,20 @@ EffectParam effect_param(Effect e) {
   return {"?", 0, 0, 0};
 }
 
-std::vector<double> pitch_lagged_decel(const Run& r, double lag_s) {
+std::vector<double> pitch_lagged_decel(const Run& r, double lag_s, double mode_s2) {
   const std::size_t n = r.t_s.size();
   std::vector<double> out(n, 0.0);
   if (r.ref_decel_mps2.size() != n) return out;
-  double decel = n ? r.ref_decel_mps2[0] : 0.0;
+  // Backward Euler on m x'' + lag x' + x = a (stable at any step; with m = 0 it is the implicit
+  // first-order lag). The mode starts at rest on the run's first deceleration.
+  double decel = n ? r.ref_decel_mps2[0] : 0.0, rate = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
-    if (i > 0 && lag_s > 1e-6) {  // implicit Euler: no exp per sample
+    if (i > 0 && mode_s2 > 1e-9) {
+      const double dt = r.t_s[i] - r.t_s[i - 1];
+      rate =
+          (mode_s2 * rate + dt * (r.ref_decel_mps2[i] - decel)) / (mode_s2 + dt * lag_s + dt * dt);
+      decel += dt * rate;
+    } else if (i > 0 && lag_s > 1e-6) {  // implicit Euler: no exp per sample
       const double dt = r.t_s[i] - r.t_s[i - 1];
       decel += (r.ref_decel_mps2[i] - decel) * dt / (lag_s + dt);
     } else
@@ -268,7 +281,9 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
       case Effect::LoadTransfer:
       case Effect::LoadTransferShape:
       case Effect::LoadTransferMeasured:  // Fz grows with the measured deceleration
-        follow_load(pitch_lagged_decel(r, p[first + effect_params(effect).size() - 1]), q,
+        follow_load(pitch_lagged_decel(r, p[first + effect_params(effect).size() - 2],
+                                       p[first + effect_params(effect).size() - 1]),
+                    q,
                     effect == Effect::LoadTransferMeasured ? kPublishedKxLoadRatio : p[first + 1],
                     effect == Effect::LoadTransferShape ? p[first + 2] : 0.0);
         break;

@@ -172,9 +172,11 @@ using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vect
 /// The transient slip k' of sigma dk'/dx = k - k' along the run's rolled distance, exact for k
 /// linear between its points, from y0 (clamped between 0 and k's first value).
 std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0);
-/// The reference's deceleration as the wheel's load follows it through the body's pitch: a
-/// first-order lag of lag_s (implicit Euler, stable at any step; lag_s ~ 0: the deceleration).
-std::vector<double> pitch_lagged_decel(const Run& r, double lag_s);
+/// The reference's deceleration as the wheel's load follows it through the body's pitch:
+/// mode_s2 x'' + lag_s x' + x = a, a damped pitch mode of 1 / (2 pi sqrt(mode_s2)) Hz, or with
+/// mode_s2 = 0 a first-order lag of lag_s (implicit, stable at any step; both ~ 0: the
+/// deceleration itself).
+std::vector<double> pitch_lagged_decel(const Run& r, double lag_s, double mode_s2 = 0.0);
 /// A force cap cuts the curve where it still rises: over the last 15 % of force below the cap
 /// (up to 98 % of it for a fitted cap, whose runs go on past it) the force's slope over slip is
 /// at least this share of its initial slope (5-30 % of the cap). A tyre's own top, and a curve

@@ -148,6 +148,37 @@ static std::vector<Run> own_ripple(const std::vector<Run>& runs, const std::vect
   return own;
 }
 
+namespace {
+
+/// The body's pitch as a person reads it: a mode's frequency and damping ratio (m x'' + lag x' +
+/// x = a: w = 1 / sqrt(m), zeta = lag w / 2), or the lag alone.
+void pitch_note(Report& rep, EffectScore& e) {
+  double lag_s = 0, mode_s2 = 0;
+  for (const auto& [name, v] : e.params) {
+    if (name == "pitch_lag_s") lag_s = v;
+    if (name == "pitch_mode_s2") mode_s2 = v;
+  }
+  // A mode above 3 Hz (m under 2.8e-3 s^2), or one that does not overshoot, is a lag: a body's
+  // pitch is 1-1.5 Hz, and a faster or overdamped mode follows a brake's ramp as a lag does.
+  const double zeta_at = mode_s2 > 0 ? 0.5 * lag_s / std::sqrt(mode_s2) : INFINITY;
+  if (mode_s2 < 2.8e-3 || zeta_at >= 1.0) {
+    rep.notes.push_back(fmt::format(
+        "the wheel's load follows the deceleration {:.3f} s behind it (the body's pitch, as a "
+        "first-order lag)",
+        lag_s));
+    return;
+  }
+  const double hz = 1.0 / (2 * M_PI * std::sqrt(mode_s2));
+  e.params.emplace_back("pitch_mode_hz", hz);
+  e.params.emplace_back("pitch_damping_ratio", zeta_at);
+  rep.notes.push_back(fmt::format(
+      "the wheel's load follows the deceleration through the body's pitch mode: {:.2f} Hz, "
+      "damping ratio {:.2f} (it overshoots a step; {:.3f} s behind it on a steady ramp)",
+      hz, zeta_at, lag_s));
+}
+
+}  // namespace
+
 /// Load transfer, once named, is measured with the stiffness ratio held at the published tyres'
 /// (Effect::LoadTransferMeasured): its score's magnitude is that fit's q; the free fit's q stays
 /// beside it (dfz_per_decel_free_ratio_s2_per_m). Its free ratio has decided the naming (inside
@@ -188,6 +219,7 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
         "(dFz/Fz: the peak's change over published tyres' d ln D / d ln Fz, {:.2f}; 0.87-0.97){}",
         q, kPublishedKxLoadRatio, q_free, ratio, load_per_decel, kPublishedPeakLoadExponent,
         h_over_l));
+    pitch_note(rep, e);
   }
 }
 

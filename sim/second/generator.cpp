@@ -24,8 +24,9 @@ using State = std::array<double, 3>;
 
 struct Dynamics {
   const RunCase& c;
-  double v_roller_mps = 0;  ///< roller surface speed (roller bench)
-  double decel_mps2 = 0;    ///< the deceleration the load follows (behind the pitch lag)
+  double v_roller_mps = 0;     ///< roller surface speed (roller bench)
+  double decel_mps2 = 0;       ///< the deceleration the load follows (behind the body's pitch)
+  double decel_rate_mps3 = 0;  ///< its rate, the pitch mode's second state
 
   double line_pressure_bar(double t_s) const {
     const double t0 = c.tester.leading_s;
@@ -151,10 +152,17 @@ std::string simulate_event_csv(const RunCase& c) {
         dyn.v_roller_mps += (v_target - dyn.v_roller_mps) * h / (c.roller_droop_tau_s + h);
       }
       if (c.bench == can::BenchKind::Ground) {
-        // The load follows the body's pitch: the deceleration through a first-order lag.
+        // The load follows the body's pitch: the deceleration through a first-order lag, or a
+        // damped pitch mode (semi-implicit Euler: at a step of 0.1 ms and 1.5 Hz, h w = 1e-3).
         const double decel = std::max(0.0, (before[1] - y[1]) / h);
-        dyn.decel_mps2 += c.pitch_lag_s > 0 ? (decel - dyn.decel_mps2) * h / (c.pitch_lag_s + h)
-                                            : decel - dyn.decel_mps2;
+        if (c.pitch_hz > 0) {
+          const double w = 2 * M_PI * c.pitch_hz;
+          dyn.decel_rate_mps3 += h * (w * w * (decel - dyn.decel_mps2) -
+                                      2 * c.pitch_damping * w * dyn.decel_rate_mps3);
+          dyn.decel_mps2 += h * dyn.decel_rate_mps3;
+        } else
+          dyn.decel_mps2 += c.pitch_lag_s > 0 ? (decel - dyn.decel_mps2) * h / (c.pitch_lag_s + h)
+                                              : decel - dyn.decel_mps2;
       }
       angle_ref += v_ref * h / ref_radius;
       angle_wheel += y[0] * h;
@@ -324,6 +332,16 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
   const double front_share = rng.uniform(0.5, 0.6);
   base.mass_kg = 2 * base.fz_n / (front_share * kG);
   const double h_over_l = rng.uniform(0.15, 0.35);
+  // The body's pitch (its own stream: the other draws of a seed stay as they were): half the
+  // vehicles let the load follow the deceleration 0-0.2 s behind it, half through a damped pitch
+  // mode of 1-1.5 Hz (damping 0.3-0.7, a car's suspension; a truck's mode is as slow).
+  Rng prng(seed * 15485863 + 29);
+  if (prng.uniform() < 0.5) {
+    base.pitch_lag_s = prng.uniform(0.0, 0.2);
+  } else {
+    base.pitch_hz = prng.uniform(1.0, 1.5);
+    base.pitch_damping = prng.uniform(0.3, 0.7);
+  }
   base.other_brakes_ratio = 1.0 + 2.0 * rng.uniform(0.3, 0.6);  // the other front + two rears
   base.other_mu = rng.uniform(0.9, 1.1);
   SetDraw out;
@@ -384,6 +402,10 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
   out.station =
       fmt::format("{} {} runs {:g} Hz {:.1f}-{:.1f} km/h", heavy ? "heavy" : "car", n_runs,
                   tx.sample_hz, out.runs.front().speed_kmh, out.runs.back().speed_kmh);
+  if (bench == can::BenchKind::Ground)
+    out.station += base.pitch_hz > 0 ? fmt::format(", pitch mode {:.2f} Hz damping {:.2f}",
+                                                   base.pitch_hz, base.pitch_damping)
+                                     : fmt::format(", pitch lag {:.3f} s", base.pitch_lag_s);
   return out;
 }
 

@@ -44,7 +44,11 @@ struct RunCase {
   double relaxation_m = 0, time_offset_s = 0, radius_error_ratio = 0, lmuv = 0;
   // the vehicle (ground)
   double mass_kg = 1500, load_per_decel = 0;  ///< relative load change per m/s^2 (0: none)
-  double pitch_lag_s = 0;  ///< the body's pitch: the load follows the deceleration this late
+  /// The body's pitch: the load follows the deceleration through a first-order lag of
+  /// pitch_lag_s, or, where pitch_hz > 0, through a damped pitch mode (a second-order low-pass of
+  /// that natural frequency and damping ratio, unit gain: it overshoots a step for damping < 1).
+  double pitch_lag_s = 0;
+  double pitch_hz = 0, pitch_damping = 0.5;
   /// The roller's drive slows under the brake's load (its motor's slip): the roller speed settles
   /// at V0 (1 - droop F / droop_ref) behind a first-order lag (0: a stiff drive).
   double roller_droop_ratio = 0, roller_droop_ref_n = 1, roller_droop_tau_s = 0.2;

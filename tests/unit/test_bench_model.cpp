@@ -139,7 +139,7 @@ TEST(BenchModel, TheRelaxationLagIsUndone) {
 TEST(BenchModel, ALoadTransferIsWrittenWithItsRatioAndLagAndRefusedOnARoller) {
   gap::BenchModel m = model_of({gap::Effect::LoadTransfer}, {0.0337});
   m.condition = "ground";
-  m.effects[0].more = {1.4, 0.08};
+  m.effects[0].more = {1.4, 0.08, 0.016};
   m.effects[0].origin = "declared from the vehicle";
   const std::string text = gap::format_bench_model(m);
   EXPECT_NE(text.find("# declared from the vehicle\n[effects.load_transfer]"), std::string::npos)
@@ -147,14 +147,15 @@ TEST(BenchModel, ALoadTransferIsWrittenWithItsRatioAndLagAndRefusedOnARoller) {
   const gap::BenchModel back = gap::parse_bench_model(text, "m.toml");
   ASSERT_EQ(back.effects.size(), 1u);
   EXPECT_DOUBLE_EQ(back.effects[0].value, 0.0337);
-  EXPECT_EQ(back.effects[0].more, (std::vector<double>{1.4, 0.08}));
-  // Written by hand without its ratio and lag: the published ratio, no lag.
+  EXPECT_EQ(back.effects[0].more, (std::vector<double>{1.4, 0.08, 0.016}));
+  EXPECT_NE(text.find("pitch_mode_s2 = 0.016"), std::string::npos) << text;
+  // Written by hand without its ratio, lag and mode: the published ratio, no lag, no mode.
   const gap::BenchModel bare = gap::parse_bench_model(
       "schema = \"brakefit.bench_model\"\nversion = 1\ncondition = \"ground\"\n"
       "[effects.load_transfer]\ndfz_per_decel_s2_per_m = 0.03\n",
       "m.toml");
   ASSERT_EQ(bare.effects.size(), 1u);
-  EXPECT_EQ(bare.effects[0].more, (std::vector<double>{1.25, 0.0}));
+  EXPECT_EQ(bare.effects[0].more, (std::vector<double>{1.25, 0.0, 0.0}));
   std::string roller = text;
   roller.replace(roller.find("\"ground\""), 8, "\"roller\"");
   try {
@@ -172,7 +173,7 @@ TEST(BenchModel, TheDeclaredLoadTransferFollowsTheVehiclesGeometry) {
   EXPECT_EQ(front.effect, gap::Effect::LoadTransfer);
   EXPECT_NEAR(front.value, 0.93 * 1300 * 0.55 / (2 * 2.6 * 3800), 1e-9);
   EXPECT_DOUBLE_EQ(rear.value, -front.value);  // the rear wheels unload
-  EXPECT_EQ(front.more, (std::vector<double>{1.25, 0.0}));
+  EXPECT_EQ(front.more, (std::vector<double>{1.25, 0.0, 0.0}));
   EXPECT_NE(front.origin.find("1300 kg"), std::string::npos);
 }
 
@@ -188,7 +189,7 @@ TEST(BenchModel, ADeclaredLoadTransferIsHeldInTheFitsThroughASmoothedDeceleratio
   gap::Run noisy = steady;
   for (std::size_t i = 0; i < noisy.t_s.size(); ++i)
     noisy.ref_decel_mps2[i] += (i % 2 ? 0.5 : -0.5);
-  const std::vector<double> with_lt{tyre[0], tyre[1], tyre[2], tyre[3], 0.034, 1.25, 0.0};
+  const std::vector<double> with_lt{tyre[0], tyre[1], tyre[2], tyre[3], 0.034, 1.25, 0.0, 0.0};
   const auto effect = gap::predict(steady, with_lt, {gap::Effect::LoadTransfer});
   const auto effect_noisy = gap::predict(noisy, with_lt, {gap::Effect::LoadTransfer});
   for (gap::Run* r : {&steady, &noisy}) {
@@ -213,8 +214,8 @@ TEST(BenchModel, ADeclaredLoadTransferIsHeldInTheFitsThroughASmoothedDeceleratio
 
 TEST(BenchModel, AGroundWheelsLoadTransferIsUndoneToItsStaticLoad) {
   // A braking car: the deceleration rises with the force, the front wheel's load with it through
-  // a pitch lag. predict() makes the force at the moving load; undone, the points lie on the
-  // tyre's curve at the static load.
+  // the body's pitch mode (1.3 Hz). predict() makes the force at the moving load; undone, the
+  // points lie on the tyre's curve at the static load.
   const MfParams tyre{15.0, 1.58, 3400.0, 0.1, 0, 0};
   gap::Run r = synthetic_run();
   r.bench = can::BenchKind::Ground;
@@ -223,12 +224,13 @@ TEST(BenchModel, AGroundWheelsLoadTransferIsUndoneToItsStaticLoad) {
     r.ref_decel_mps2[i] = 9.0 * std::min(1.0, r.t_s[i] / 0.8);
   }
   const std::vector<gap::Effect> effects{gap::Effect::LoadTransfer};
-  const std::vector<double> lt{0.034, 1.3, 0.06};
+  const std::vector<double> lt{0.034, 1.3, 0.06, 0.015};
   r.initial_force_n = 0.0;
-  r.force_n = gap::predict(r, {tyre.B, tyre.C, tyre.D, tyre.E, lt[0], lt[1], lt[2]}, effects);
+  r.force_n =
+      gap::predict(r, {tyre.B, tyre.C, tyre.D, tyre.E, lt[0], lt[1], lt[2], lt[3]}, effects);
   gap::BenchModel m = model_of(effects, {lt[0]});
   m.condition = "ground";
-  m.effects[0].more = {lt[1], lt[2]};
+  m.effects[0].more = {lt[1], lt[2], lt[3]};
   const gap::TyrePoints pts = gap::tyre_points(r, m);
   double worst = 0, raw_worst = 0;
   for (std::size_t i = 0; i < pts.curve.size(); ++i) {
@@ -244,9 +246,9 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   gap::Report rep;
   rep.accepted = {gap::Effect::TyreShift, gap::Effect::RelaxationLength, gap::Effect::LoadTransfer,
                   gap::Effect::WheelInertia};
-  // B C D E, tyre shift, sigma, load transfer (q, ratio, pitch lag), inertia
-  rep.after.params = {15, 1.5, 3400, 0.1, 1e-4, 0.2, 0.03, 1.2, 0.1, 0.9};
-  rep.after.stderr_ = {0, 0, 0, 0, 0, 0.01, 0, 0, 0, 0.05};
+  // B C D E, tyre shift, sigma, load transfer (q, ratio, pitch lag, pitch mode), inertia
+  rep.after.params = {15, 1.5, 3400, 0.1, 1e-4, 0.2, 0.03, 1.2, 0.1, 0.02, 0.9};
+  rep.after.stderr_ = {0, 0, 0, 0, 0, 0.01, 0, 0, 0, 0, 0.05};
   // On a roller a load transfer is not the instrument's and stays in the curve, said so.
   const gap::BenchModel m = gap::bench_model_from(rep, gap::Condition::Roller);
   EXPECT_EQ(m.condition, "roller");
@@ -260,7 +262,7 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   // Where the runs disagree more than the fit's own error says (the folds' spread), the standard
   // error is the spread; where less, the fit's.
   gap::Report spread = rep;
-  spread.after_spread = {0, 0, 0, 0, 0, 0.04, 0, 0, 0, 0.01};
+  spread.after_spread = {0, 0, 0, 0, 0, 0.04, 0, 0, 0, 0, 0.01};
   const gap::BenchModel s = gap::bench_model_from(spread, gap::Condition::Roller);
   EXPECT_DOUBLE_EQ(s.effects[0].stderr_, 0.04);
   EXPECT_DOUBLE_EQ(s.effects[1].stderr_, 0.05);
@@ -269,7 +271,7 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   ASSERT_EQ(g.effects.size(), 3u);
   EXPECT_EQ(g.effects[1].effect, gap::Effect::LoadTransfer);
   EXPECT_DOUBLE_EQ(g.effects[1].value, 0.03);
-  EXPECT_EQ(g.effects[1].more, (std::vector<double>{1.2, 0.1}));
+  EXPECT_EQ(g.effects[1].more, (std::vector<double>{1.2, 0.1, 0.02}));
   EXPECT_TRUE(g.not_held.empty());
   // Where the report measured it (the stiffness ratio held at the published tyres'), that
   // magnitude is held, not the free fit's.
@@ -279,12 +281,13 @@ TEST(BenchModel, FromAReportHoldsTheInstrumentsEffectsOnly) {
   lt.params = {{"dfz_per_decel_s2_per_m", 0.006},
                {"kx_load_ratio", 0.38},
                {"pitch_lag_s", 0.02},
+               {"pitch_mode_s2", 0.015},
                {"dfz_per_decel_free_ratio_s2_per_m", 0.03}};
   rep.effects = {lt};
   const gap::BenchModel measured = gap::bench_model_from(rep, gap::Condition::Ground);
   ASSERT_EQ(measured.effects.size(), 3u);
   EXPECT_DOUBLE_EQ(measured.effects[1].value, 0.006);
-  EXPECT_EQ(measured.effects[1].more, (std::vector<double>{1.25, 0.02}));
+  EXPECT_EQ(measured.effects[1].more, (std::vector<double>{1.25, 0.02, 0.015}));
 }
 
 TEST(BenchModel, ADeclaredPressureFilterIsUndone) {

@@ -153,6 +153,7 @@ TEST(ReferenceRipple, ALoadThatFollowsTheBodysPitchIsNamedWithItsLag) {
     std::vector<gap::Run> runs;
     for (auto& run : set.runs) {
       run.pitch_lag_s = 0.1;
+      run.pitch_hz = 0;  // a lag, not the mode half the vehicles draw
       sim::append_event_csv_runs(runs, sim2::simulate_event_csv(run), "b");
     }
     const gap::Report rep = gap::diagnose(runs, sim::pooled_start(runs),
