@@ -33,6 +33,11 @@ inline constexpr double kPublishedPeakLoadExponent = 0.93;
 inline bool is_nuisance(Effect e) {
   return e == Effect::ReferenceBias || e == Effect::TyreShift;
 }
+/// Load transfer in any of its forms (free, measured at the published ratio, with E's slope).
+inline bool is_load_transfer(Effect e) {
+  return e == Effect::LoadTransfer || e == Effect::LoadTransferShape ||
+         e == Effect::LoadTransferMeasured;
+}
 /// Where e's first parameter sits in the params of a fit of model (after B, C, D, E and the
 /// effects before it); nothing when the model lacks it.
 std::optional<std::size_t> param_offset(const std::vector<Effect>& model, Effect e);

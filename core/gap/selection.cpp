@@ -511,9 +511,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   if (names.size() > 1)
     first = std::max(first, 1.0 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12));
   // Load transfer's law is one stiffness ratio for a tyre's own load laws of D, Kx and E.
-  const bool law_in_part = !names.empty() && (names.front() == Effect::LoadTransfer ||
-                                              names.front() == Effect::LoadTransferShape ||
-                                              names.front() == Effect::LoadTransferMeasured);
+  const bool law_in_part = !names.empty() && is_load_transfer(names.front());
   const FitQuality q = fit_quality(first, runner_up, rep.gap_before_rmse_n, current_heldout,
                                    rep.noise_n, law_in_part, o);
   if (!names.empty() && q == FitQuality::OneBite)

@@ -20,11 +20,6 @@ WarmFitter::RunsKey WarmFitter::key_of(const std::vector<const Run*>& runs) {
 
 namespace {
 
-bool is_load_transfer(Effect e) {
-  return e == Effect::LoadTransfer || e == Effect::LoadTransferShape ||
-         e == Effect::LoadTransferMeasured;
-}
-
 /// A start with the load following the body's pitch mode, a car's 1.25 Hz at damping 0.6 (lag
 /// 2 zeta / w = 0.15 s), the curve the baseline's: the parameters up to the load transfer's (the
 /// rest at their catalogue starts). None where a cradle cap comes first (its start is the runs').
