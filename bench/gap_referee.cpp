@@ -2,7 +2,7 @@
 //   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
 //               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1]
-//               [--only EFFECT,...] [--why 1|2] [--pairs N] [--detection SETS]
+//               [--only EFFECT,...] [--pick I,...] [--why 1|2] [--pairs N] [--detection SETS]
 //               [--results FILE [--results-key K]]
 // Three generators make the runs: A, the project's simulator (candump logs), B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
@@ -71,6 +71,7 @@ int run(int argc, char** argv) {
              "  [--stations cars|every] (generator B's sets: cars at 5 km/h and 30-70 km/h, or\n"
              "                         every export: 50-1000 Hz, 2-6 runs, heavy vehicles)\n"
              "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
+             "  [--pick I,...]        (only these pair trials, by the index a miss names)\n"
              "  [--detection SETS [--detection-levels L]]  (detection curves: SETS sets at\n"
              "                         each of L magnitudes per effect, straight rows)\n"
              "  [--results FILE [--results-key KEY]]  (the tables into FILE's section KEY,\n"
@@ -118,6 +119,9 @@ int run(int argc, char** argv) {
     else if (k == "--only") {
       std::stringstream list(v);
       for (std::string e; std::getline(list, e, ',');) st.only.push_back(e);
+    } else if (k == "--pick") {
+      std::stringstream list(v);
+      for (std::string e; std::getline(list, e, ',');) st.pick.push_back(std::atoi(e.c_str()));
     } else if (k == "--why")
       st.why = std::atoi(v);
     else if (k == "--crossed")

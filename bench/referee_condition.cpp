@@ -289,7 +289,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   }
   if (st.pairs > 0 && trial_gen != sim::Generator::C && c != gap::Condition::RollerToRoad)
     j.update(run_pairs(c, trial_gen, gates.options,
-                       {st.pairs, st.seed, st.threads, st.why, st.only}, cname),
+                       {st.pairs, st.seed, st.threads, st.why, st.only, st.pick}, cname),
              /*merge_objects=*/true);
   if (st.detection > 0 && trial_gen == gate_gen && c != gap::Condition::RollerToRoad)
     j.update(run_detection(c, trial_gen, gates.options,

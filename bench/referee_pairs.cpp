@@ -26,7 +26,9 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
   };
   for (int t = 0; t < st.n; ++t) {
     draws.push_back(sim::draw_pair(rng, c, trial_gen));
-    if (st.only.empty() || wanted(draws.back().effect) || wanted(draws.back().effect2))
+    const bool picked =
+        st.pick.empty() || std::find(st.pick.begin(), st.pick.end(), t) != st.pick.end();
+    if (picked && (st.only.empty() || wanted(draws.back().effect) || wanted(draws.back().effect2)))
       kept.push_back(t);
   }
   const int n = static_cast<int>(kept.size());

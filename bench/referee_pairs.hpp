@@ -18,6 +18,7 @@ struct PairSettings {
   int threads = 2;
   int why = 0;                    ///< 1: each miss's notes; 2: each hit's line too
   std::vector<std::string> only;  ///< only the pairs with one of these effects (same draws)
+  std::vector<int> pick;          ///< only these pairs, by index (a miss rerun alone)
 };
 /// Pair trials of a condition from trial_gen, diagnosed with the given gates. Prints the table and
 /// every miss; returns the figures for the referee's JSON.

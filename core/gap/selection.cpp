@@ -1,7 +1,7 @@
-// Ranking and selection: leave-one-run-out error, the gates calibrated per condition, forward
-// selection with the range, separability, fit-quality and floor checks, each leading candidate
-// scored with the encoders' ripple seen through its own model; load transfer's magnitude
-// measured at the published stiffness ratio.
+// Ranking and selection: forward selection on held-out error with the gates, the range,
+// separability, fit-quality and floor checks, each leading candidate scored with the encoders'
+// ripple seen through its own model. (The gates and the fit-quality check are gates.cpp's; the
+// held-out error, heldout.cpp's; load transfer's report, load_transfer_report.cpp's.)
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -15,15 +15,6 @@
 
 namespace brakefit::gap {
 
-// Gates (see calibrated_options): max(0.10, 1.5 x the largest null gain) and max(10, 1.5 x the
-// largest null BIC drop) over 30 null sets per condition (bench/gap_referee --calibrate 30).
-// Null maxima measured 2026-11-21: roller gain 0.005, dBIC -2.4; ground 0.013, -10.1; roller vs
-// road 0.146, -305.8 (the roller fit carried to the road leaves a small bias every transfer
-// candidate nibbles at).
-constexpr double kRollerGateGain = 0.10, kRollerBicMargin = 10.0;
-constexpr double kGroundGateGain = 0.10, kGroundBicMargin = 16.0;
-constexpr double kTransferGateGain = 0.22, kTransferBicMargin = 460.0;
-
 /// A candidate's own ripple estimate (own_ripple) is made for the kOwnRippleCandidates largest
 /// gains of a round that reach kOwnRippleGateShare x the gain gate: a ripple read through the
 /// baseline takes part of an effect the baseline cannot bend to (generator B's load transfer,
@@ -34,30 +25,6 @@ constexpr std::size_t kOwnRippleCandidates = 2;
 constexpr double kOwnRippleGateShare = 0.5;
 constexpr int kOwnRipplePasses = 2;
 
-Options calibrated_options(Condition c, Options base) {
-  // Seeds of the null sets 1 000 000+, disjoint from the referee's.
-  switch (c) {
-    case Condition::Roller:
-      base.gate_gain = kRollerGateGain;
-      base.bic_margin = kRollerBicMargin;
-      break;
-    case Condition::Ground:
-      base.gate_gain = kGroundGateGain;
-      base.bic_margin = kGroundBicMargin;
-      break;
-    case Condition::RollerToRoad:
-      base.gate_gain = kTransferGateGain;
-      base.bic_margin = kTransferBicMargin;
-      break;
-  }
-  return base;
-}
-
-bool at_bound(double v, const EffectParam& p) {
-  const double tol = 0.005 * (p.hi - p.lo);
-  return (!p.lo_is_physical && v <= p.lo + tol) || v >= p.hi - tol;
-}
-
 /// The effect's parameters (the last of the fit's) all inside their physical ranges.
 static bool params_inside(Effect e, const Fit& f) {
   const auto eps = effect_params(e);
@@ -66,69 +33,8 @@ static bool params_inside(Effect e, const Fit& f) {
   return true;
 }
 
-double structure_left_share(double before_n, double after_n, double noise_n) {
-  const double before = before_n * before_n - noise_n * noise_n;
-  if (!(before > 0)) return 1.0;
-  return std::sqrt(std::max(0.0, after_n * after_n - noise_n * noise_n) / before);
-}
-
-bool structured_gap_left(double before_n, double after_n, double noise_n, const Options& o) {
-  return after_n > o.noise_factor * noise_n ||
-         (after_n > o.structure_floor_share * o.noise_factor * noise_n &&
-          structure_left_share(before_n, after_n, noise_n) > o.max_structure_left_share);
-}
-
-FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n, double after_n,
-                       double noise_n, bool law_in_part, const Options& o) {
-  // A structured gap is left above noise_factor x the floor, or where most of the structure
-  // beyond the noise is still there and what is left lies clear of the floor's own scatter: a
-  // curve that is not a Magic Formula, whose structure is a few times the noise, is left under
-  // noise_factor x the floor by a candidate that takes a small bite of it.
-  if (!structured_gap_left(before_n, after_n, noise_n, o) || first_gain >= o.min_first_gain)
-    return FitQuality::Explained;
-  // One bite, not a nibble: a curve that is not a Magic Formula lets several candidates (a cap,
-  // a threshold, an offset) nibble alike, while a real effect that its law matches only in part
-  // (a tyre's own load laws under a strong load transfer) stands alone. Only for such a law: a
-  // lag or a threshold that fits in part is not that effect (a brush-model tyre on a roller let
-  // a time offset take 27 % of its gap, 6.8x any other candidate).
-  if (law_in_part && first_gain >= o.gate_gain &&
-      first_gain >= o.min_bite_over_runner_up * runner_up_gain)
-    return FitQuality::OneBite;
-  return FitQuality::Nibble;
-}
-
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
-
-/// Held-out error: RMS over runs of each run's RMSE with parameters fitted on runs outside its
-/// fold. Up to kMaxFolds runs each run is its own fold (leave one run out); past that the runs
-/// are cut into kMaxFolds blocks of consecutive runs (a block of a day's tests held out at once),
-/// so a set's cost grows with its points, not with their square.
-std::vector<const Run*> fold_training(const std::vector<Run>& runs, std::size_t k, std::size_t& lo,
-                                      std::size_t& hi) {
-  const std::size_t n = runs.size(), folds = std::min(n, kMaxFolds);
-  lo = k * n / folds;
-  hi = (k + 1) * n / folds;
-  std::vector<const Run*> train;
-  for (std::size_t i = 0; i < n; ++i)
-    if (i < lo || i >= hi) train.push_back(&runs[i]);
-  return train;
-}
-
-double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects,
-               const Fitter& fit) {
-  const std::size_t n = runs.size(), folds = std::min(n, kMaxFolds);
-  double sq = 0;
-  for (std::size_t k = 0; k < folds; ++k) {
-    std::size_t lo = 0, hi = 0;
-    const std::vector<double> params = fit(fold_training(runs, k, lo, hi), effects).params;
-    for (std::size_t i = lo; i < hi; ++i) {
-      const double e = rmse(runs[i], params, effects);
-      sq += e * e;
-    }
-  }
-  return std::sqrt(sq / static_cast<double>(n));
-}
 
 /// The encoders' ripple estimated against a candidate's model instead of the baseline: from the
 /// slip as conditioned, refitted and estimated again (as the baseline's is), each run's
@@ -146,81 +52,6 @@ static std::vector<Run> own_ripple(const std::vector<Run>& runs, const std::vect
     level_reference_biases(own);
   }
   return own;
-}
-
-namespace {
-
-/// The body's pitch as a person reads it: a mode's frequency and damping ratio (m x'' + lag x' +
-/// x = a: w = 1 / sqrt(m), zeta = lag w / 2), or the lag alone.
-void pitch_note(Report& rep, EffectScore& e) {
-  double lag_s = 0, mode_s2 = 0;
-  for (const auto& [name, v] : e.params) {
-    if (name == "pitch_lag_s") lag_s = v;
-    if (name == "pitch_mode_s2") mode_s2 = v;
-  }
-  // A mode above 3 Hz (m under 2.8e-3 s^2), or one that does not overshoot, is a lag: a body's
-  // pitch is 1-1.5 Hz, and a faster or overdamped mode follows a brake's ramp as a lag does.
-  const double zeta_at = mode_s2 > 0 ? 0.5 * lag_s / std::sqrt(mode_s2) : INFINITY;
-  if (mode_s2 < 2.8e-3 || zeta_at >= 1.0) {
-    rep.notes.push_back(fmt::format(
-        "the wheel's load follows the deceleration {:.3f} s behind it (the body's pitch, as a "
-        "first-order lag)",
-        lag_s));
-    return;
-  }
-  const double hz = 1.0 / (2 * M_PI * std::sqrt(mode_s2));
-  e.params.emplace_back("pitch_mode_hz", hz);
-  e.params.emplace_back("pitch_damping_ratio", zeta_at);
-  rep.notes.push_back(fmt::format(
-      "the wheel's load follows the deceleration through the body's pitch mode: {:.2f} Hz, "
-      "damping ratio {:.2f} (it overshoots a step; {:.3f} s behind it on a steady ramp)",
-      hz, zeta_at, lag_s));
-}
-
-}  // namespace
-
-/// Load transfer, once named, is measured with the stiffness ratio held at the published tyres'
-/// (Effect::LoadTransferMeasured): its score's magnitude is that fit's q; the free fit's q stays
-/// beside it (dfz_per_decel_free_ratio_s2_per_m). Its free ratio has decided the naming (inside
-/// its range) and its fit stays the model's: a note says both.
-void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
-                           const Options& o) {
-  std::vector<Effect> model = rep.accepted;
-  const auto lt = std::find(model.begin(), model.end(), Effect::LoadTransfer);
-  if (lt == model.end()) return;
-  *lt = Effect::LoadTransferMeasured;
-  const double q = fit(pointers(runs), model).params.at(*param_offset(model, *lt));
-  std::vector<double> loads;
-  for (const Run& r : runs)
-    if (r.wheel_load_n > 0) loads.push_back(r.wheel_load_n);
-  std::sort(loads.begin(), loads.end());
-  const double fz_n = loads.empty() ? 0.0 : loads[loads.size() / 2];
-  for (auto& e : rep.effects) {
-    if (e.effect != Effect::LoadTransfer || !e.accepted || e.params.size() < 2) continue;
-    const double q_free = e.params[0].second, ratio = e.params[1].second;
-    e.params[0].second = q;
-    e.params.emplace_back("dfz_per_decel_free_ratio_s2_per_m", q_free);
-    const double load_per_decel = q / kPublishedPeakLoadExponent;
-    e.params.emplace_back("load_ratio_per_decel_s2_per_m", load_per_decel);
-    std::string h_over_l;
-    if (o.vehicle_mass_kg > 0 && fz_n > 0) {
-      const double v = 2.0 * fz_n * load_per_decel / o.vehicle_mass_kg;
-      e.params.emplace_back("cg_height_over_wheelbase", v);
-      h_over_l = fmt::format(
-          "; with the vehicle's {:.0f} kg and the wheel's {:.0f} N, the centre of gravity's "
-          "height over the wheelbase is {:.3f} (h/L = 2 Fz (dFz/Fz per m/s^2) / m)",
-          o.vehicle_mass_kg, fz_n, v);
-    }
-    rep.notes.push_back(fmt::format(
-        "load_transfer's magnitude, {:.4g} per m/s^2, is measured with the slip stiffness's load "
-        "ratio held at published MF 6.1 tyres' ({:.2f}; 1.15-1.33): the runs end just past the "
-        "peak and fix the stiffness's load sensitivity (q x ratio) better than q; the free fit "
-        "says {:.4g} at a ratio of {:.2f}. The wheel's load changes by {:.4g} of itself per m/s^2 "
-        "(dFz/Fz: the peak's change over published tyres' d ln D / d ln Fz, {:.2f}; 0.87-0.97){}",
-        q, kPublishedKxLoadRatio, q_free, ratio, load_per_decel, kPublishedPeakLoadExponent,
-        h_over_l));
-    pitch_note(rep, e);
-  }
 }
 
 /// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,

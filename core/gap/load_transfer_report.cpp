@@ -1,0 +1,88 @@
+// Load transfer as the report gives it: its magnitude at the published stiffness ratio, as
+// dFz/Fz and as h/L, and the body's pitch it follows.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+
+namespace brakefit::gap {
+
+namespace {
+
+/// The body's pitch as a person reads it: a mode's frequency and damping ratio (m x'' + lag x' +
+/// x = a: w = 1 / sqrt(m), zeta = lag w / 2), or the lag alone.
+void pitch_note(Report& rep, EffectScore& e) {
+  double lag_s = 0, mode_s2 = 0;
+  for (const auto& [name, v] : e.params) {
+    if (name == "pitch_lag_s") lag_s = v;
+    if (name == "pitch_mode_s2") mode_s2 = v;
+  }
+  // A mode above 3 Hz (m under 2.8e-3 s^2), or one that does not overshoot, is a lag: a body's
+  // pitch is 1-1.5 Hz, and a faster or overdamped mode follows a brake's ramp as a lag does.
+  const double zeta_at = mode_s2 > 0 ? 0.5 * lag_s / std::sqrt(mode_s2) : INFINITY;
+  if (mode_s2 < 2.8e-3 || zeta_at >= 1.0) {
+    rep.notes.push_back(fmt::format(
+        "the wheel's load follows the deceleration {:.3f} s behind it (the body's pitch, as a "
+        "first-order lag)",
+        lag_s));
+    return;
+  }
+  const double hz = 1.0 / (2 * M_PI * std::sqrt(mode_s2));
+  e.params.emplace_back("pitch_mode_hz", hz);
+  e.params.emplace_back("pitch_damping_ratio", zeta_at);
+  rep.notes.push_back(fmt::format(
+      "the wheel's load follows the deceleration through the body's pitch mode: {:.2f} Hz, "
+      "damping ratio {:.2f} (it overshoots a step; {:.3f} s behind it on a steady ramp)",
+      hz, zeta_at, lag_s));
+}
+
+}  // namespace
+
+/// Load transfer, once named, is measured with the stiffness ratio held at the published tyres'
+/// (Effect::LoadTransferMeasured): its score's magnitude is that fit's q; the free fit's q stays
+/// beside it (dfz_per_decel_free_ratio_s2_per_m). Its free ratio has decided the naming (inside
+/// its range) and its fit stays the model's: a note says both.
+void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
+                           const Options& o) {
+  std::vector<Effect> model = rep.accepted;
+  const auto lt = std::find(model.begin(), model.end(), Effect::LoadTransfer);
+  if (lt == model.end()) return;
+  *lt = Effect::LoadTransferMeasured;
+  const double q = fit(pointers(runs), model).params.at(*param_offset(model, *lt));
+  std::vector<double> loads;
+  for (const Run& r : runs)
+    if (r.wheel_load_n > 0) loads.push_back(r.wheel_load_n);
+  std::sort(loads.begin(), loads.end());
+  const double fz_n = loads.empty() ? 0.0 : loads[loads.size() / 2];
+  for (auto& e : rep.effects) {
+    if (e.effect != Effect::LoadTransfer || !e.accepted || e.params.size() < 2) continue;
+    const double q_free = e.params[0].second, ratio = e.params[1].second;
+    e.params[0].second = q;
+    e.params.emplace_back("dfz_per_decel_free_ratio_s2_per_m", q_free);
+    const double load_per_decel = q / kPublishedPeakLoadExponent;
+    e.params.emplace_back("load_ratio_per_decel_s2_per_m", load_per_decel);
+    std::string h_over_l;
+    if (o.vehicle_mass_kg > 0 && fz_n > 0) {
+      const double v = 2.0 * fz_n * load_per_decel / o.vehicle_mass_kg;
+      e.params.emplace_back("cg_height_over_wheelbase", v);
+      h_over_l = fmt::format(
+          "; with the vehicle's {:.0f} kg and the wheel's {:.0f} N, the centre of gravity's "
+          "height over the wheelbase is {:.3f} (h/L = 2 Fz (dFz/Fz per m/s^2) / m)",
+          o.vehicle_mass_kg, fz_n, v);
+    }
+    rep.notes.push_back(fmt::format(
+        "load_transfer's magnitude, {:.4g} per m/s^2, is measured with the slip stiffness's load "
+        "ratio held at published MF 6.1 tyres' ({:.2f}; 1.15-1.33): the runs end just past the "
+        "peak and fix the stiffness's load sensitivity (q x ratio) better than q; the free fit "
+        "says {:.4g} at a ratio of {:.2f}. The wheel's load changes by {:.4g} of itself per m/s^2 "
+        "(dFz/Fz: the peak's change over published tyres' d ln D / d ln Fz, {:.2f}; 0.87-0.97){}",
+        q, kPublishedKxLoadRatio, q_free, ratio, load_per_decel, kPublishedPeakLoadExponent,
+        h_over_l));
+    pitch_note(rep, e);
+  }
+}
+
+}  // namespace brakefit::gap
