@@ -87,6 +87,9 @@ struct TrialResult {
   Injection truth;
   std::vector<std::string> verdict;
   std::vector<std::string> notes;  ///< "cannot separate A from B" notes of the diagnosis
+  /// Each candidate's score as the report's table gives it (round, effect, parameters, gain,
+  /// BIC drop, decision): what the referee's --why prints under a miss.
+  std::vector<std::string> scores;
   double estimate = 0.0;   ///< the injected effect's parameter when fitted alone (NaN for none)
   double estimate2 = 0.0;  ///< a pair's second effect's, as estimate
   /// Load transfer's dFz/Fz per m/s^2 where it was named (NaN: not named).
