@@ -2,6 +2,7 @@
 // selection naming both (bench/gap_referee --pairs runs them by the hundred).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <string>
@@ -93,4 +94,24 @@ TEST(GapPairs, AHeavyWheelUnderLoadTransferIsFoundAsAPairWhereNeitherPassesAlone
             (std::set<std::string>{"load_transfer", "wheel_inertia"}));
   EXPECT_NEAR(t.estimate2, inj.magnitude2, 0.1 * inj.magnitude2);
   EXPECT_NEAR(t.estimate, inj.magnitude, 0.25 * inj.magnitude);
+}
+
+TEST(GapPairs, APairReplacesTwoNamedEffectsThatLeaveAStructuredGap) {
+  // Generator B's ground: a heavy wheel (0.86 kg m^2) under load transfer, the vehicle's body
+  // pitching. One effect at a time, the inertia came first (0.68: it took part of load
+  // transfer's bend) and a time offset second, 18 N of structured gap left: `wheel_inertia,
+  // time_offset, unexplained`. Searched in pairs once two were named, the inertia and load
+  // transfer together leave 16 N held out and replace them.
+  sim::Injection inj{"wheel_inertia", 0.8587, gap::Condition::Ground, sim::Generator::B};
+  inj.effect2 = "load_transfer";
+  inj.magnitude2 = 0.05079;
+  const auto t = sim::run_trial(inj, 801029, gap::calibrated_options(inj.condition));
+  EXPECT_TRUE(t.correct()) << ::testing::PrintToString(t.verdict);
+  bool replaced = false;
+  for (const auto& n : t.notes)
+    replaced |= n.find("the first took part of its partner's bend") != std::string::npos;
+  EXPECT_TRUE(replaced);
+  EXPECT_EQ(std::count(t.verdict.begin(), t.verdict.end(), "time_offset"), 0)
+      << ::testing::PrintToString(t.verdict);
+  EXPECT_NEAR(t.estimate, inj.magnitude, 0.15 * inj.magnitude);
 }
