@@ -92,8 +92,42 @@ void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double
   }
 }
 
-std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f,
+namespace {
+
+/// How many standard errors an effect's magnitude lies from no effect (nullopt: not measured, or
+/// an effect whose first parameter has no zero to test against).
+std::optional<double> magnitude_z(Effect e, const Fit& f, std::size_t at) {
+  switch (e) {
+    case Effect::RelaxationLength:
+    case Effect::TimeOffset:
+    case Effect::WheelInertia:
+    case Effect::BrakeThreshold:
+    case Effect::SlipOffset:
+    case Effect::LoadTransfer:
+    case Effect::LoadTransferShape:
+    case Effect::LoadTransferMeasured:
+    case Effect::SpeedFriction:
+      break;
+    default:
+      return std::nullopt;
+  }
+  if (at >= f.params.size() || at >= f.stderr_.size() || !std::isfinite(f.stderr_[at]) ||
+      !(f.stderr_[at] > 0))
+    return std::nullopt;
+  return std::abs(f.params[at]) / f.stderr_[at];
+}
+
+}  // namespace
+
+std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f, std::size_t at,
                                                 const std::vector<Run>& runs) {
+  if (const auto z = magnitude_z(e.effect, f, at); z && *z < kMinMagnitudeZ)
+    return MissingEvidence{
+        fmt::format("{} fits{{}} (held-out gain {:.3f}) at {} {:.3g} +- {:.2g}: within {:.1f} "
+                    "standard errors of no effect (at least {:.0f}); not accepted",
+                    to_string(e.effect), e.gain, effect_params(e.effect).front().name,
+                    f.params.at(at), f.stderr_.at(at), *z, kMinMagnitudeZ),
+        "its magnitude cannot be told from zero"};
   if (e.effect == Effect::CradleCap) {
     const double kink = cap_kink_ratio(runs, e.params[0].second);
     if (kink >= kCapMinEndSlopeRatio) return std::nullopt;

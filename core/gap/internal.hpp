@@ -218,7 +218,13 @@ inline constexpr double kOffsetMinRestShare = 0.5;
 inline constexpr double kSpeedFrictionMinSpeedSpread = 1.5;
 /// Fewer samples at rest than this over all runs: the offset cannot be checked there.
 inline constexpr std::size_t kOffsetMinRestPoints = 10;
-std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f,
+/// An effect's magnitude (its first parameter, at index `at` of the fit) within this many of
+/// its standard errors of no effect is not named: the fit cannot tell it from zero (generator B's
+/// heavy wheel left 1.3x the floor, and load transfer took part of it at -0.001 +- 0.00065 per
+/// m/s^2, a load no car's pitch moves). The fit's errors assume independent residuals, so they
+/// are, if anything, small: the test errs towards naming.
+inline constexpr double kMinMagnitudeZ = 2.0;
+std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f, std::size_t at,
                                                 const std::vector<Run>& runs);
 /// Held-out folds at most: up to this many runs each is held out alone (leave one run out).
 inline constexpr std::size_t kMaxFolds = 6;

@@ -47,14 +47,14 @@ std::pair<gap::EffectScore, gap::Fit> candidate(gap::Effect e, const char* name,
 
 TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
   const auto [s, f] = candidate(gap::Effect::BrakeThreshold, "p0_bar", 2.0);
-  EXPECT_FALSE(gap::missing_evidence(s, f, {rise(true), rise(true)}).has_value());
-  const auto missing = gap::missing_evidence(s, f, {rise(false), rise(false)});
+  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {rise(true), rise(true)}).has_value());
+  const auto missing = gap::missing_evidence(s, f, 4, {rise(false), rise(false)});
   ASSERT_TRUE(missing.has_value());
   EXPECT_NE(missing->note.find("did not roll free below it"), std::string::npos);
   // A run that starts above the threshold shows no rise: nothing to hold against it.
   gap::Run late = rise(false);
   for (double& x : late.force_n) x += 200.0;
-  EXPECT_FALSE(gap::missing_evidence(s, f, {late, late}).has_value());
+  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {late, late}).has_value());
 }
 
 TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
@@ -69,14 +69,14 @@ TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
     return r;
   };
   // The rest shows the offset: named. It shows none (a steep foot fitted as an offset): refused.
-  EXPECT_FALSE(gap::missing_evidence(s, f, {at_rest(-5.8e-4, 100), at_rest(-6.1e-4, 100)}));
-  const auto missing = gap::missing_evidence(s, f, {at_rest(1e-5, 100), at_rest(-2e-5, 100)});
+  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {at_rest(-5.8e-4, 100), at_rest(-6.1e-4, 100)}));
+  const auto missing = gap::missing_evidence(s, f, 4, {at_rest(1e-5, 100), at_rest(-2e-5, 100)});
   ASSERT_TRUE(missing.has_value());
   EXPECT_NE(missing->note.find("rolling free before the brake"), std::string::npos);
   // Too few samples at rest to say, or a rest whose noise covers the offset: not refused.
-  EXPECT_FALSE(gap::missing_evidence(s, f, {at_rest(0, 4), at_rest(0, 4)}));
+  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {at_rest(0, 4), at_rest(0, 4)}));
   const gap::Run noisy = at_rest(0, 20, 3e-3);
-  EXPECT_FALSE(gap::missing_evidence(s, f, {noisy, noisy}));
+  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {noisy, noisy}));
 }
 
 TEST(GapEvidence, SpeedFrictionOnARollerNeedsRunsAtSpeedsApart) {
@@ -86,14 +86,33 @@ TEST(GapEvidence, SpeedFrictionOnARollerNeedsRunsAtSpeedsApart) {
     r.v_ref_mps.assign(r.t_s.size(), v_mps);
     return r;
   };
-  const auto missing = gap::missing_evidence(s, f, {at_speed(1.39), at_speed(1.40)});
+  const auto missing = gap::missing_evidence(s, f, 4, {at_speed(1.39), at_speed(1.40)});
   ASSERT_TRUE(missing.has_value());
   EXPECT_NE(missing->note.find("one speed"), std::string::npos);
-  EXPECT_FALSE(gap::missing_evidence(s, f, {at_speed(0.6), at_speed(1.6)}));
+  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {at_speed(0.6), at_speed(1.6)}));
   // On the ground a stop spans its speeds: not this check's to refuse.
   gap::Run ground = at_speed(11.0);
   ground.bench = can::BenchKind::Ground;
-  EXPECT_FALSE(gap::missing_evidence(s, f, {ground, ground}));
+  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {ground, ground}));
+}
+
+TEST(GapEvidence, AMagnitudeTheFitCannotTellFromZeroIsNotNamed) {
+  // Load transfer at -0.001 +- 0.00065 per m/s^2 (generator B's heavy wheel, where it took a part
+  // of what the inertia's law left): 1.6 standard errors from no load transfer.
+  auto [s, f] = candidate(gap::Effect::LoadTransfer, "dfz_per_decel_s2_per_m", -0.001);
+  f.stderr_ = {0.1, 0.01, 30.0, 0.02, 0.00065};
+  const auto missing = gap::missing_evidence(s, f, 4, {rise(false), rise(false)});
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_NE(missing->note.find("standard errors of no effect"), std::string::npos);
+  f.stderr_[4] = 0.0002;  // 5 standard errors: measured
+  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {rise(false), rise(false)}).has_value());
+  f.stderr_[4] = NAN;  // no covariance: nothing to test
+  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {rise(false), rise(false)}).has_value());
+  // A force cap has no zero to test against.
+  auto [cs, cf] = candidate(gap::Effect::CradleCap, "cap_n", 3000.0);
+  cf.stderr_ = {0.1, 0.01, 30.0, 0.02, 1e6};
+  const auto cap = gap::missing_evidence(cs, cf, 4, {rise(false), rise(false)});
+  EXPECT_TRUE(!cap || cap->note.find("standard errors") == std::string::npos);
 }
 
 TEST(GapFitQuality, AStructureLeftUnderTheFitQualityFactorStillCountsWhereMostOfItRemains) {
