@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/gap/internal.hpp"
@@ -97,20 +98,13 @@ namespace {
 /// How many standard errors an effect's magnitude lies from no effect (nullopt: not measured, or
 /// an effect whose first parameter has no zero to test against).
 std::optional<double> magnitude_z(Effect e, const Fit& f, std::size_t at) {
-  switch (e) {
-    case Effect::RelaxationLength:
-    case Effect::TimeOffset:
-    case Effect::WheelInertia:
-    case Effect::BrakeThreshold:
-    case Effect::SlipOffset:
-    case Effect::LoadTransfer:
-    case Effect::LoadTransferShape:
-    case Effect::LoadTransferMeasured:
-    case Effect::SpeedFriction:
-      break;
-    default:
-      return std::nullopt;
-  }
+  // Effects whose magnitude (first parameter) is 0 for no effect.
+  constexpr std::array kZeroIsNone{
+      Effect::RelaxationLength,  Effect::TimeOffset,           Effect::WheelInertia,
+      Effect::BrakeThreshold,    Effect::SlipOffset,           Effect::LoadTransfer,
+      Effect::LoadTransferShape, Effect::LoadTransferMeasured, Effect::SpeedFriction};
+  if (std::find(kZeroIsNone.begin(), kZeroIsNone.end(), e) == kZeroIsNone.end())
+    return std::nullopt;
   if (at >= f.params.size() || at >= f.stderr_.size() || !std::isfinite(f.stderr_[at]) ||
       !(f.stderr_[at] > 0))
     return std::nullopt;
