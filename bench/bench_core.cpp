@@ -1,11 +1,13 @@
 // Google Benchmark: BMU lookup, one LM fit, one hybrid fit (200 points), SOM training in the
 // paper's configuration (10x10 hex, batch, 1000 rough + 500 fine epochs, 2000 curves), MLP
-// training.
+// training, and the Magic Formula over a run's 4096 samples one at a time against in vector stages
+// (core/vecmath.hpp, as the gap diagnosis evaluates it).
 #include <benchmark/benchmark.h>
 
 #include "cli/io.hpp"
 #include "core/rng.hpp"
 #include "core/train.hpp"
+#include "core/vecmath.hpp"
 
 using namespace brakefit;
 
@@ -36,6 +38,39 @@ void BM_LmFit200(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(fit::fit_mf(c, fit::classic_start(c)));
 }
 BENCHMARK(BM_LmFit200)->Unit(benchmark::kMicrosecond);
+
+const MfParams kRunTyre{14.0, 1.6, 4200.0, 0.25, 0, 0};
+std::vector<double> run_slips() {
+  return even_slips(4096, 0.4);
+}
+
+void BM_MfScalar4096(benchmark::State& st) {
+  const std::vector<double> slip = run_slips();
+  std::vector<double> f(slip.size());
+  for (auto _ : st) {
+    for (std::size_t i = 0; i < slip.size(); ++i) f[i] = mf_force_n(kRunTyre, slip[i]);
+    benchmark::DoNotOptimize(f.data());
+  }
+}
+BENCHMARK(BM_MfScalar4096)->Unit(benchmark::kMicrosecond);
+
+void BM_MfVector4096(benchmark::State& st) {
+  const std::vector<double> slip = run_slips();
+  const MfParams& p = kRunTyre;
+  std::vector<double> u(slip.size()), f(slip.size());
+  for (auto _ : st) {
+    for (std::size_t i = 0; i < slip.size(); ++i) u[i] = f[i] = p.B * slip[i];
+    atan_in_place(f);
+    for (std::size_t i = 0; i < slip.size(); ++i) f[i] = u[i] - p.E * (u[i] - f[i]);
+    atan_in_place(f);
+    for (double& x : f) x *= p.C;
+    sin_in_place(f);
+    for (double& x : f) x *= p.D;
+    benchmark::DoNotOptimize(f.data());
+  }
+  st.SetLabel(vector_math_available() ? "libmvec AVX2" : "scalar (no AVX2 on this CPU)");
+}
+BENCHMARK(BM_MfVector4096)->Unit(benchmark::kMicrosecond);
 
 void BM_HybridFit200(benchmark::State& st) {
   const Model& m = shipped_model();

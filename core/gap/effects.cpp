@@ -6,6 +6,7 @@
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
+#include "core/vecmath.hpp"
 
 namespace brakefit::gap {
 
@@ -188,18 +189,24 @@ std::vector<double> centred_mean(const std::vector<double>& t_s, const std::vect
 /// 40-300 ms would misplace the lag). y0: the transient slip at the first sample.
 std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0) {
   const std::size_t n = k.size();
-  std::vector<double> y(n);
+  std::vector<double> y(n), h(n, 0.0), decay(n, 0.0);
   y[0] = std::clamp(y0, std::min(k[0], 0.0), std::max(k[0], 0.0));
   for (std::size_t i = 1; i < n; ++i) {
-    const double h =
-        (r.t_s[i] - r.t_s[i - 1]) * 0.5 * (r.v_ref_mps[i] + r.v_ref_mps[i - 1]) / sigma_m;
-    if (h < 1e-9) {
-      y[i] = y[i - 1];
+    h[i] = (r.t_s[i] - r.t_s[i - 1]) * 0.5 * (r.v_ref_mps[i] + r.v_ref_mps[i - 1]) / sigma_m;
+    decay[i] = -h[i];
+  }
+  exp_in_place(decay);
+  // y_i = c_i + a_i y_(i-1): the constants first (vectorised), then a chain of one fma a step.
+  std::vector<double> c(n, 0.0);
+  for (std::size_t i = 1; i < n; ++i) {
+    if (h[i] < 1e-9) {
+      decay[i] = 1.0;
       continue;
     }
-    const double slope = (k[i] - k[i - 1]) / h;
-    y[i] = k[i] - slope + (y[i - 1] - k[i - 1] + slope) * std::exp(-h);
+    const double slope = (k[i] - k[i - 1]) / h[i];
+    c[i] = k[i] - slope + (slope - k[i - 1]) * decay[i];
   }
+  for (std::size_t i = 1; i < n; ++i) y[i] = c[i] + decay[i] * y[i - 1];
   return y;
 }
 
@@ -208,15 +215,18 @@ void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, 
   // Exact for an input linear between the points: y' = (u - y) / tau over a step dt with u
   // rising at k = (f1 - f0) / dt gives y1 = f1 - tau k + (y0 - f0 + tau k) exp(-dt / tau).
   if (f.empty()) return;
-  double f_prev = f[0], y = y0;
-  f[0] = y;
-  for (std::size_t i = 1; i < f.size(); ++i) {
+  // As y_i = c_i + a_i y_(i-1): the constants first (vectorised), then one fma a step.
+  const std::size_t n = f.size();
+  std::vector<double> a(n, 0.0), c(n, 0.0);
+  for (std::size_t i = 1; i < n; ++i) a[i] = -std::max(t_s[i] - t_s[i - 1], 1e-9) / tau_s;
+  exp_in_place(a);
+  for (std::size_t i = 1; i < n; ++i) {
     const double dt = std::max(t_s[i] - t_s[i - 1], 1e-9);
-    const double k = (f[i] - f_prev) / dt, a = std::exp(-dt / tau_s);
-    y = f[i] - tau_s * k + (y - f_prev + tau_s * k) * a;
-    f_prev = f[i];
-    f[i] = y;
+    const double tau_k = tau_s * (f[i] - f[i - 1]) / dt;
+    c[i] = f[i] - tau_k + (tau_k - f[i - 1]) * a[i];
   }
+  f[0] = y0;
+  for (std::size_t i = 1; i < n; ++i) f[i] = c[i] + a[i] * f[i - 1];
 }
 
 // GCC 12 at -O3 reports a bogus -Wfree-nonheap-object on the inlined vector destructors of this
@@ -242,12 +252,18 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   bool relaxation = false, threshold = false;
   // A load following the deceleration a: D by 1 + q a, B C D by (1 + q a)^ratio, E by e q a.
   auto follow_load = [&](const std::vector<double>& decel, double q, double ratio, double e_slope) {
+    std::vector<double> power(n);  // load^(ratio - 1) as exp((ratio - 1) log load), as vectors
     for (std::size_t i = 0; i < n; ++i) {
       const double load = std::max(0.05, 1.0 + q * decel[i]);
       d_scale[i] *= load;
-      b_scale[i] *= std::pow(load, ratio - 1.0);
       e_add[i] += e_slope * (load - 1.0);
+      power[i] = load;
     }
+    if (ratio == 1.0) return;
+    log_in_place(power);
+    for (double& x : power) x *= ratio - 1.0;
+    exp_in_place(power);
+    for (std::size_t i = 0; i < n; ++i) b_scale[i] *= power[i];
   };
   if (const double q = r.declared_load_per_decel_s2_per_m; q != 0 && r.ref_decel_mps2.size() == n)
     follow_load(centred_mean(r.t_s, r.ref_decel_mps2, kDeclaredLoadHalfWindowS), q,
@@ -332,23 +348,35 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   if (dt_s != 0) {
     std::vector<double> shifted(n);
     const double s0 = slip.front(), t0 = r.t_s.front();
+    std::size_t j = 1;  // the times shifted rise with i: walk to each one's interval
     for (std::size_t i = 0; i < n; ++i) {
       const double at = r.t_s[i] - dt_s;
-      // Before the run: the ramp from zero slip that led into it.
-      shifted[i] = at >= t0
-                       ? interp(r.t_s, slip, at)
-                       : std::max(s0 + r.initial_slip_rate_per_s * (at - t0), std::min(s0, 0.0));
+      if (at < t0) {  // before the run: the ramp from zero slip that led into it
+        shifted[i] = std::max(s0 + r.initial_slip_rate_per_s * (at - t0), std::min(s0, 0.0));
+      } else if (at >= r.t_s.back()) {
+        shifted[i] = slip.back();
+      } else {
+        while (r.t_s[j] <= at) ++j;
+        const double w = (at - r.t_s[j - 1]) / (r.t_s[j] - r.t_s[j - 1]);
+        shifted[i] = slip[j - 1] + w * (slip[j] - slip[j - 1]);
+      }
     }
     slip = std::move(shifted);
   }
-  std::vector<double> f(n);
-  const MfParams base{p[0], p[1], p[2], p[3], 0, 0};
+  // The Magic Formula, F = D sin(C atan(phi)), phi = u - E (u - atan u), u = B x, a stage at a
+  // time over the run so that the arctangents and the sine run as vectors (core/vecmath.hpp).
+  std::vector<double> u(n), atan_u(n), f(n);
+  for (std::size_t i = 0; i < n; ++i) u[i] = atan_u[i] = p[0] * b_scale[i] * slip[i];
+  atan_in_place(atan_u);
   for (std::size_t i = 0; i < n; ++i) {
-    MfParams m = base;
-    m.D *= d_scale[i];
-    m.B *= b_scale[i];
-    m.E = std::min(m.E + e_add[i], 1.0);
-    f[i] = std::min(mf_force_n(m, slip[i]), cap_n) + add[i];
+    const double e = std::min(p[3] + e_add[i], 1.0);
+    f[i] = u[i] - e * (u[i] - atan_u[i]);
+  }
+  atan_in_place(f);
+  for (std::size_t i = 0; i < n; ++i) f[i] *= p[1];
+  sin_in_place(f);
+  for (std::size_t i = 0; i < n; ++i) {
+    f[i] = std::min(p[2] * d_scale[i] * f[i], cap_n) + add[i];
     // Brake threshold: gain p = Tb/R + gain p0 while the brake bites; below p0 the pads give no
     // torque and the measured pressure can be anything up to p0: gain min(p, p0) is added.
     // Behind a declared filter the pads bite when the line's pressure passes p0, not the
