@@ -78,7 +78,7 @@ int run(int argc, char** argv) {
              "                         by default the condition and generators; the command\n"
              "                         and the commit at its head)\n"
              "  [--why 1|2]           (1: each miss's notes, the misses are always listed;\n"
-             "                         2: each hit too, with its estimate and gap left)\n";
+             "                         2: each hit too, with its estimate, gap left and notes)\n";
       return k == "-h" || k == "--help" ? 0 : 64;
     }
     const char* v = argv[i + 1];

@@ -230,16 +230,18 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
                          ? interp(r.t_s, slip, at)
                          : std::max(slip.front() + r.initial_slip_rate_per_s * (at - r.t_s.front()),
                                     std::min(slip.front(), 0.0));
-    const double accel = r.wheel_accel_mps2.empty() ? 0.0 : r.wheel_accel_mps2[i];
+    // The wheel's inertial force and its load are in the channel as late as the tyre's force.
+    const double accel = r.wheel_accel_mps2.empty() ? 0.0 : interp(r.t_s, r.wheel_accel_mps2, at);
+    const double load_at = interp(r.t_s, load, at);
     // A declared pressure filter (the exporting software's first order) undone: the line's
     // pressure leads the channel by tau times its rate, and a fast ground ramp is tens of bar/s
     // per 10 ms.
     const double line_n = r.force_n[i] + filter_gain_n_s * r.pressure_rate_bar_per_s[i];
-    out.curve.slip_ratio.push_back(s * std::pow(load[i], load_ratio - 1.0));
+    out.curve.slip_ratio.push_back(s * std::pow(load_at, load_ratio - 1.0));
     // Below the threshold the pads give no torque: the channel reads up to p0 while the tyre
     // carries only the wheel's inertial force (predict's min(threshold, force), undone).
     out.curve.force_n.push_back((line_n + inertia * accel / r2 - std::min(threshold_n, line_n)) /
-                                load[i]);
+                                load_at);
   }
   if (r.runaway)
     out.left_out.emplace_back(

@@ -210,6 +210,27 @@ std::vector<double> relax(const Run& r, const std::vector<double>& k, double sig
   return y;
 }
 
+std::vector<double> read_earlier(const std::vector<double>& t_s, const std::vector<double>& x,
+                                 double dt_s) {
+  const std::size_t n = x.size();
+  if (n < 2 || std::all_of(x.begin(), x.end(), [&](double v) { return v == x.front(); })) return x;
+  std::vector<double> out(n);
+  std::size_t j = 1;  // the times read rise with i: walk to each one's interval
+  for (std::size_t i = 0; i < n; ++i) {
+    const double at = t_s[i] - dt_s;
+    if (at <= t_s.front()) {
+      out[i] = x.front();
+    } else if (at >= t_s.back()) {
+      out[i] = x.back();
+    } else {
+      while (t_s[j] <= at) ++j;
+      const double w = (at - t_s[j - 1]) / (t_s[j] - t_s[j - 1]);
+      out[i] = x[j - 1] + w * (x[j] - x[j - 1]);
+    }
+  }
+  return out;
+}
+
 void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, double tau_s,
                         double y0) {
   // Exact for an input linear between the points: y' = (u - y) / tau over a step dt with u
@@ -362,6 +383,10 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
       }
     }
     slip = std::move(shifted);
+    // The channel is late as a whole: what the tyre and the wheel add to it (the wheel's inertial
+    // force, a load or friction that changes the curve) shows dt late too.
+    for (std::vector<double>* x : {&add, &d_scale, &b_scale, &e_add})
+      *x = read_earlier(r.t_s, *x, dt_s);
   }
   // The Magic Formula, F = D sin(C atan(phi)), phi = u - E (u - atan u), u = B x, a stage at a
   // time over the run so that the arctangents and the sine run as vectors (core/vecmath.hpp).

@@ -174,6 +174,10 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
 
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
+/// x at each sample time less dt_s, linear between samples (its first value before the run, its
+/// last past it; j walks: t_s rising). A negative dt_s reads later.
+std::vector<double> read_earlier(const std::vector<double>& t_s, const std::vector<double>& x,
+                                 double dt_s);
 /// The transient slip k' of sigma dk'/dx = k - k' along the run's rolled distance, exact for k
 /// linear between its points, from y0 (clamped between 0 and k's first value).
 std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0);

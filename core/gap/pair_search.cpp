@@ -21,6 +21,8 @@ namespace {
 /// pair may fit badly held out alone (its partner's bend pulls it off) but still lower the
 /// in-sample error a lot.
 constexpr std::size_t kLeadersPerRanking = 3;
+/// How many of the largest round-1 gains a candidate pushed to "no effect" is paired with.
+constexpr std::size_t kPushedPartners = 2;
 
 bool lag_and_delay(Effect a, Effect b) {
   return (a == Effect::RelaxationLength && b == Effect::TimeOffset) ||
@@ -63,37 +65,56 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
   };
   lead([](const EffectScore* a, const EffectScore* b) { return a->gain > b->gain; });
   lead([](const EffectScore* a, const EffectScore* b) { return a->delta_bic < b->delta_bic; });
+  // A candidate whose fit alone stopped at "no effect" (a one-sided magnitude at 0): the data
+  // pushed it past none, as a partner bending the curve the other way does (a heavy wheel under
+  // a lag: alone, a lag reads as a negative inertia). Paired with the largest gains only.
+  std::set<Effect> pushed;
+  for (const auto* s : scored) {
+    const EffectParam ep = effect_param(s->effect);
+    if (ep.lo_is_physical && ep.lo == 0.0 && !s->params.empty() && s->params.front().second <= 0.0)
+      pushed.insert(s->effect);
+  }
+  std::vector<const EffectScore*> by_gain = scored;
+  std::sort(by_gain.begin(), by_gain.end(),
+            [](const EffectScore* a, const EffectScore* b) { return a->gain > b->gain; });
+  std::vector<std::pair<Effect, Effect>> pairs;
+  {
+    const std::vector<Effect> pool(leaders.begin(), leaders.end());
+    for (std::size_t i = 0; i < pool.size(); ++i)
+      for (std::size_t k = i + 1; k < pool.size(); ++k) pairs.emplace_back(pool[i], pool[k]);
+    for (Effect e : pushed)
+      for (std::size_t k = 0; k < std::min(kPushedPartners, by_gain.size()); ++k)
+        if (!leaders.contains(e) && by_gain[k]->effect != e)
+          pairs.emplace_back(by_gain[k]->effect, e);
+  }
   auto alone_n = [&](Effect e) {  // the effect's held-out error alone (round 1)
     for (const auto* s : scored)
       if (s->effect == e) return s->heldout_rmse_after_n;
     return gap_before_n;
   };
   std::optional<PairFound> best;
-  const std::vector<Effect> pool(leaders.begin(), leaders.end());
-  for (std::size_t i = 0; i < pool.size(); ++i)
-    for (std::size_t k = i + 1; k < pool.size(); ++k) {
-      const Effect a = pool[i], b = pool[k];
-      if (lag_and_delay(a, b)) continue;
-      std::vector<Effect> model = base;
-      model.push_back(a);
-      model.push_back(b);
-      Fit f = fit(pointers(runs), model);
-      if (!inside(model, a, f) || !inside(model, b, f)) continue;
-      const double h = heldout(runs, model, fit);
-      if (best && h >= best->heldout_n) continue;
-      PairFound p;
-      p.model = model;
-      p.heldout_n = h;
-      p.gain = 1.0 - h / std::max(gap_before_n, 1e-12);
-      p.delta_bic = f.bic() - base_fit.bic();
-      // Each member's place: the pair against the other member alone.
-      p.gain_over_a = 1.0 - h / std::max(alone_n(b), 1e-12);
-      p.gain_over_b = 1.0 - h / std::max(alone_n(a), 1e-12);
-      p.a = member(a, model, f);
-      p.b = member(b, model, f);
-      p.fit = std::move(f);
-      best = std::move(p);
-    }
+  for (const auto& [a, b] : pairs) {
+    if (lag_and_delay(a, b)) continue;
+    std::vector<Effect> model = base;
+    model.push_back(a);
+    model.push_back(b);
+    Fit f = fit(pointers(runs), model);
+    if (!inside(model, a, f) || !inside(model, b, f)) continue;
+    const double h = heldout(runs, model, fit);
+    if (best && h >= best->heldout_n) continue;
+    PairFound p;
+    p.model = model;
+    p.heldout_n = h;
+    p.gain = 1.0 - h / std::max(gap_before_n, 1e-12);
+    p.delta_bic = f.bic() - base_fit.bic();
+    // Each member's place: the pair against the other member alone.
+    p.gain_over_a = 1.0 - h / std::max(alone_n(b), 1e-12);
+    p.gain_over_b = 1.0 - h / std::max(alone_n(a), 1e-12);
+    p.a = member(a, model, f);
+    p.b = member(b, model, f);
+    p.fit = std::move(f);
+    best = std::move(p);
+  }
   if (!best) return std::nullopt;
   PairFound& p = *best;
   // The member that contributes more is named first (the verdict's order is the model's).
