@@ -230,9 +230,9 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
                          ? interp(r.t_s, slip, at)
                          : std::max(slip.front() + r.initial_slip_rate_per_s * (at - r.t_s.front()),
                                     std::min(slip.front(), 0.0));
-    // The wheel's inertial force and its load are in the channel as late as the tyre's force.
+    // The wheel's inertial force is in the channel as late as the tyre's force (as predict()).
     const double accel = r.wheel_accel_mps2.empty() ? 0.0 : interp(r.t_s, r.wheel_accel_mps2, at);
-    const double load_at = interp(r.t_s, load, at);
+    const double load_at = load[i];
     // A declared pressure filter (the exporting software's first order) undone: the line's
     // pressure leads the channel by tau times its rate, and a fast ground ramp is tens of bar/s
     // per 10 ms.

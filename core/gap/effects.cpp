@@ -383,10 +383,9 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
       }
     }
     slip = std::move(shifted);
-    // The channel is late as a whole: what the tyre and the wheel add to it (the wheel's inertial
-    // force, a load or friction that changes the curve) shows dt late too.
-    for (std::vector<double>* x : {&add, &d_scale, &b_scale, &e_add})
-      *x = read_earlier(r.t_s, *x, dt_s);
+    // The channel is late as a whole: the wheel's inertial force in it shows dt late too. (A
+    // load's timing is its own law's, the body's pitch lag, which would trade with dt here.)
+    add = read_earlier(r.t_s, add, dt_s);
   }
   // The Magic Formula, F = D sin(C atan(phi)), phi = u - E (u - atan u), u = B x, a stage at a
   // time over the run so that the arctangents and the sine run as vectors (core/vecmath.hpp).
