@@ -34,24 +34,26 @@ bool vector_math_available() {
 }
 #endif
 
+namespace {
+
+void apply(std::span<double> x, void (*vec)(double*, std::size_t), double (*scalar)(double)) {
+  if (vector_math_available()) return vec(x.data(), x.size());
+  for (double& v : x) v = scalar(v);
+}
+
+}  // namespace
+
 void atan_in_place(std::span<double> x) {
-  if (vector_math_available()) return detail::atan_avx2(x.data(), x.size());
-  for (double& v : x) v = std::atan(v);
+  apply(x, detail::atan_avx2, [](double v) { return std::atan(v); });
 }
-
 void sin_in_place(std::span<double> x) {
-  if (vector_math_available()) return detail::sin_avx2(x.data(), x.size());
-  for (double& v : x) v = std::sin(v);
+  apply(x, detail::sin_avx2, [](double v) { return std::sin(v); });
 }
-
 void exp_in_place(std::span<double> x) {
-  if (vector_math_available()) return detail::exp_avx2(x.data(), x.size());
-  for (double& v : x) v = std::exp(v);
+  apply(x, detail::exp_avx2, [](double v) { return std::exp(v); });
 }
-
 void log_in_place(std::span<double> x) {
-  if (vector_math_available()) return detail::log_avx2(x.data(), x.size());
-  for (double& v : x) v = std::log(v);
+  apply(x, detail::log_avx2, [](double v) { return std::log(v); });
 }
 
 }  // namespace brakefit
