@@ -196,7 +196,7 @@ std::vector<double> relax(const Run& r, const std::vector<double>& k, double sig
     decay[i] = -h[i];
   }
   exp_in_place(decay);
-  // y_i = c_i + a_i y_(i-1): the constants first (vectorised), then a chain of one fma a step.
+  // y_i = c_i + a_i y_(i-1): the constants first (vectorised), then one multiply-add a step.
   std::vector<double> c(n, 0.0);
   for (std::size_t i = 1; i < n; ++i) {
     if (h[i] < 1e-9) {
@@ -236,7 +236,7 @@ void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, 
   // Exact for an input linear between the points: y' = (u - y) / tau over a step dt with u
   // rising at k = (f1 - f0) / dt gives y1 = f1 - tau k + (y0 - f0 + tau k) exp(-dt / tau).
   if (f.empty()) return;
-  // As y_i = c_i + a_i y_(i-1): the constants first (vectorised), then one fma a step.
+  // As y_i = c_i + a_i y_(i-1): the constants first (vectorised), then one multiply-add a step.
   const std::size_t n = f.size();
   std::vector<double> a(n, 0.0), c(n, 0.0);
   for (std::size_t i = 1; i < n; ++i) a[i] = -std::max(t_s[i] - t_s[i - 1], 1e-9) / tau_s;
