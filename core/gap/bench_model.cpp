@@ -232,16 +232,15 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
                                     std::min(slip.front(), 0.0));
     // The wheel's inertial force is in the channel as late as the tyre's force (as predict()).
     const double accel = r.wheel_accel_mps2.empty() ? 0.0 : interp(r.t_s, r.wheel_accel_mps2, at);
-    const double load_at = load[i];
     // A declared pressure filter (the exporting software's first order) undone: the line's
     // pressure leads the channel by tau times its rate, and a fast ground ramp is tens of bar/s
     // per 10 ms.
     const double line_n = r.force_n[i] + filter_gain_n_s * r.pressure_rate_bar_per_s[i];
-    out.curve.slip_ratio.push_back(s * std::pow(load_at, load_ratio - 1.0));
+    out.curve.slip_ratio.push_back(s * std::pow(load[i], load_ratio - 1.0));
     // Below the threshold the pads give no torque: the channel reads up to p0 while the tyre
     // carries only the wheel's inertial force (predict's min(threshold, force), undone).
     out.curve.force_n.push_back((line_n + inertia * accel / r2 - std::min(threshold_n, line_n)) /
-                                load_at);
+                                load[i]);
   }
   if (r.runaway)
     out.left_out.emplace_back(

@@ -367,22 +367,11 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   if (slip_offset != 0)
     for (double& s : slip) s -= slip_offset;
   if (dt_s != 0) {
-    std::vector<double> shifted(n);
     const double s0 = slip.front(), t0 = r.t_s.front();
-    std::size_t j = 1;  // the times shifted rise with i: walk to each one's interval
-    for (std::size_t i = 0; i < n; ++i) {
-      const double at = r.t_s[i] - dt_s;
-      if (at < t0) {  // before the run: the ramp from zero slip that led into it
-        shifted[i] = std::max(s0 + r.initial_slip_rate_per_s * (at - t0), std::min(s0, 0.0));
-      } else if (at >= r.t_s.back()) {
-        shifted[i] = slip.back();
-      } else {
-        while (r.t_s[j] <= at) ++j;
-        const double w = (at - r.t_s[j - 1]) / (r.t_s[j] - r.t_s[j - 1]);
-        shifted[i] = slip[j - 1] + w * (slip[j] - slip[j - 1]);
-      }
-    }
-    slip = std::move(shifted);
+    slip = read_earlier(r.t_s, slip, dt_s);
+    for (std::size_t i = 0; i < n && r.t_s[i] - dt_s < t0; ++i)  // before the run: the ramp
+      slip[i] =
+          std::max(s0 + r.initial_slip_rate_per_s * (r.t_s[i] - dt_s - t0), std::min(s0, 0.0));
     // The channel is late as a whole: the wheel's inertial force in it shows dt late too. (A
     // load's timing is its own law's, the body's pitch lag, which would trade with dt here.)
     add = read_earlier(r.t_s, add, dt_s);
