@@ -258,6 +258,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
         rr && rr->found) {
       full.ref_ripple_from_speed = true;
       full.ref_ripple_amplitude = rr->amplitude;
+      full.ref_ripple_c = rr->c;
+      full.ref_ripple_s = rr->s;
       full.v_ref_mps = std::move(rr->v_mps);
     }
   // Noise of each channel: robust scale of second differences (the signal is smooth at 1 kHz;
@@ -370,6 +372,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.runaway_force_n = full.runaway_force_n;
   r.ref_ripple_from_speed = full.ref_ripple_from_speed;
   r.ref_ripple_amplitude = full.ref_ripple_amplitude;
+  r.ref_ripple_c = full.ref_ripple_c;
+  r.ref_ripple_s = full.ref_ripple_s;
   r.slip_sd_unmeasured = full.slip_sd_unmeasured;
   r.slip_noise = full.slip_noise;
   r.held_level_mps = full.held_level_mps;

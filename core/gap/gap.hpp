@@ -137,6 +137,7 @@ struct Run {
   /// leaves the reference alone.
   bool ref_ripple_from_speed = false;
   double ref_ripple_amplitude = 0.0;
+  double ref_ripple_c = 0.0, ref_ripple_s = 0.0;  ///< its 1 + c cos + s sin of ref_angle_rad
   /// The reference bias taken out when slip_as_conditioned was kept: a later levelling's change
   /// is carried over when an estimate starts from it again.
   double ref_bias_as_conditioned = 0.0;

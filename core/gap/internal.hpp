@@ -119,6 +119,7 @@ struct ReferenceRipple {
   bool found = false;
   double amplitude = 0.0;     ///< relative speed ripple
   double revolutions = 0.0;   ///< the fifth wheel's revolutions over the run
+  double c = 0.0, s = 0.0;    ///< the ripple divided out: 1 + c cos + s sin of the rolled angle
   std::vector<double> v_mps;  ///< the speed with the ripple divided out (when found)
 };
 /// Fits the speed as a smooth trend (a cubic spline in the rolled angle, knots 0.75 revolutions
@@ -132,7 +133,9 @@ std::optional<ReferenceRipple> fifth_wheel_ripple(const std::vector<double>& t_s
 /// Runs whose fifth wheel's ripple was not found in their own speed (too short to tell it from
 /// the trend) take the median amplitude of those that found it and scan its phase on their
 /// speed (against the same spline trend); it is taken out of their slip and deceleration. Where
-/// it cannot be placed its slip noise carries it (the floor). Returns a note (empty: none).
+/// it cannot be placed its slip noise carries it (the floor). A run that found its own over
+/// few revolutions at an amplitude far from the others' is placed at theirs the same way.
+/// Returns a note (empty: none).
 std::string share_fifth_wheel_ripple(std::vector<Run>& runs);
 /// A once-per-revolution speed ripple: each encoder's speed read as v (1 + c cos + s sin of its
 /// rolled angle), for the wheel [0] and the reference [1] where used.

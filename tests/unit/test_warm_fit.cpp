@@ -1,0 +1,35 @@
+// The diagnosis's fitter (core/gap/warm_fit): a fit of some of a set's runs that stops in a worse
+// minimum than the same model's fit of all of them restarts from that fit.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+#include "sim/referee.hpp"
+#include "sim/second/generator.hpp"
+
+using namespace brakefit;
+
+TEST(WarmFit, AFoldThatStopsInAWorseMinimumRestartsFromTheWholeSetsFit) {
+  // Generator B's ground, a 2.69 kg m^2 wheel (seed 57005), the fifth wheel without its ripple:
+  // the wheel's ripple and the inertia are all the set holds. Fitted on its two slower runs from
+  // the baseline's and the neutral starts, the model stopped at E 0.96 (4 N in-sample against
+  // 1.7 N for all three runs' fit) and the fastest run held out was 21 N off: the diagnosis said
+  // `wheel_inertia, unexplained` at 12.4 N. Restarted from the fit of all three: 1.7 N.
+  auto set = sim2::draw_set(can::BenchKind::Ground, "wheel_inertia", 2.6876665591931785, 57005);
+  std::vector<gap::Run> runs;
+  for (std::size_t k = 0; k < set.runs.size(); ++k) {
+    set.runs[k].tester.eccentricity_ref = 0;
+    sim::append_event_csv_runs(runs, sim2::simulate_event_csv(set.runs[k]), "b");
+  }
+  const auto rep =
+      gap::diagnose(runs, sim::pooled_start(runs), gap::calibrated_options(gap::Condition::Ground));
+  EXPECT_EQ(rep.verdict, std::vector<std::string>{"wheel_inertia"});
+  const auto at = gap::param_offset(rep.accepted, gap::Effect::WheelInertia);
+  ASSERT_TRUE(at);
+  EXPECT_NEAR(rep.after.params[*at], 2.6877, 0.02 * 2.6877);
+  EXPECT_LT(rep.gap_after_rmse_n, 1.5 * rep.noise_n);
+}
