@@ -1,13 +1,13 @@
 #pragma once
-// The diagnosis's fitter: every fit of a model to some runs starts from the baseline's curve and
-// from a neutral one, and, where the same runs were fitted with the model less its last effect
-// and that model names an effect, from that fit too (the effects already named at their values,
-// the new one at its start). Forward
-// selection adds one effect at a time; started cold, the effects named before it restart from
-// their catalogue starts and can stop in a worse minimum than the model without the new effect
-// (load transfer after relaxation and inertia on a ground set: in-sample BIC +385). A fit of some
-// of the runs that ends well above the same model's fit of more runs restarts from that fit: two
-// of three runs alone can lead every start to a minimum the three runs avoid.
+// The diagnosis's fitter: every fit of a model to some runs starts from the baseline's curve, from
+// a neutral one and, where the baseline is flat-topped (E > 0.5), from the baseline's curve with E
+// at 0; where the same runs were fitted with the model less its last effect and that model names
+// an effect, from that fit too (the effects already named at their values, the new one at its
+// start). Forward selection adds one effect at a time; started cold, the effects named before it
+// restart from their catalogue starts and can stop in a worse minimum than the model without the
+// new effect (load transfer after relaxation and inertia on a ground set: in-sample BIC +385). A
+// fit of some of the runs that ends well above the same model's fit of more runs restarts from
+// that fit: two of three runs alone can lead every start to a minimum the three runs avoid.
 #include <map>
 #include <tuple>
 #include <vector>

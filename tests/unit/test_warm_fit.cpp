@@ -1,5 +1,6 @@
-// The diagnosis's fitter (core/gap/warm_fit): a fit of some of a set's runs that stops in a worse
-// minimum than the same model's fit of all of them restarts from that fit.
+// The diagnosis's fitter (core/gap/warm_fit): its starts reach the tyre's basin where the
+// baseline's curve took in an unmodelled force, and a fit of some of a set's runs that stops in a
+// worse minimum than the same model's fit of all of them restarts from that fit.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -32,4 +33,21 @@ TEST(WarmFit, AFoldThatStopsInAWorseMinimumRestartsFromTheWholeSetsFit) {
   ASSERT_TRUE(at);
   EXPECT_NEAR(rep.after.params[*at], 2.6877, 0.02 * 2.6877);
   EXPECT_LT(rep.gap_after_rmse_n, 1.5 * rep.noise_n);
+}
+
+TEST(WarmFit, ABaselineFlattenedByAnUnmodelledForceAlsoStartsAtATyresShape) {
+  // Generator B's ground, a 1.24 kg m^2 wheel (seed 57045): its inertial force rises on past the
+  // tyre's peak, and the baseline took it into the curve's shape (E 0.94, D 5 570 N for a 4 250 N
+  // tyre). From the baseline's and the neutral curve the inertia came out 0.73-1.06 kg m^2 at
+  // E 0.95 (5.6 N a point), and the set was said `wheel_inertia, load_transfer, unexplained`.
+  // From the baseline's curve with E at 0: 1.227 at E 0.10, on the floor.
+  auto set = sim2::draw_set(can::BenchKind::Ground, "wheel_inertia", 1.2399055259801168, 57045);
+  std::vector<gap::Run> runs;
+  for (auto& run : set.runs) sim::append_event_csv_runs(runs, sim2::simulate_event_csv(run), "b");
+  const auto rep =
+      gap::diagnose(runs, sim::pooled_start(runs), gap::calibrated_options(gap::Condition::Ground));
+  EXPECT_EQ(rep.verdict, std::vector<std::string>{"wheel_inertia"});
+  const auto at = gap::param_offset(rep.accepted, gap::Effect::WheelInertia);
+  ASSERT_TRUE(at);
+  EXPECT_NEAR(rep.after.params[*at], 1.2399, 0.03 * 1.2399);
 }
