@@ -1,7 +1,6 @@
 #include "core/gap/warm_fit.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <numeric>
 #include <optional>
 
@@ -78,9 +77,9 @@ Fit WarmFitter::operator()(const std::vector<const Run*>& runs,
     if (const auto it = fitted_.find({key, before}); named && it != fitted_.end())
       if (Fit w = fit_runs_from(runs, effects, it->second); w.ssr < best.ssr) best = std::move(w);
   }
-  // Every start above stopped where the same model over more runs fits these runs worse (B's
-  // ground, a 2.7 kg m^2 wheel: two of three runs went to E 0.96, 4 N in-sample against 1.7 N,
-  // the third run held out 21 N against 1.7 N).
+  // Where every start above ended far above the same model's fit of more runs, that fit is a
+  // start too (B's ground, a 2.7 kg m^2 wheel: two of three runs went to E 0.96, 4 N in-sample
+  // against 1.7 N, and the third run held out was 21 N off against 1.7 N).
   const auto mean_square = [](const Fit& f) {
     return f.points == 0 ? 0.0 : f.ssr / static_cast<double>(f.points);
   };
