@@ -117,6 +117,7 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   // The tyre's own horizontal shift (MF 6.1 SHx) puts the curve's foot off zero slip: a nuisance
   // slip bias too, when the baseline earns it (each candidate is scored with and without it).
   // Tried on the raw runs and again once the encoders' ripple is out (it can hide the foot).
+  std::string shift_refused;  // said once both tries are over (the second may take the shift)
   auto consider_tyre_shift = [&] {
     if (!rep.baseline_effects.empty() && rep.baseline_effects.front() == Effect::TyreShift) return;
     const std::vector<Effect> model{Effect::TyreShift};
@@ -124,6 +125,12 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
     const Fit shifted = fit_runs(all, model, start);
     const double drop = rep.before.bic() - shifted.bic();
     if (drop < kTyreShiftBicMargin || !tyre_shift_inside(shifted, model, all)) return;
+    const double shift = shifted.params.at(*param_offset(model, Effect::TyreShift));
+    if (std::string note = tyre_shift_contradicted(runs, shift); !note.empty()) {
+      shift_refused = std::move(note);
+      return;
+    }
+    shift_refused.clear();
     rep.notes.push_back(fmt::format(
         "the curve's foot sits off zero slip (BIC {:.1f} lower with a slip bias common to the runs "
         "of up to {:.1g}): taken as the tyre's own horizontal shift (MF 6.1 SHx), a nuisance term "
@@ -160,6 +167,7 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
     rep.before = fit_runs(pointers(runs), rep.baseline_effects, start);
     consider_tyre_shift();
   }
+  if (!shift_refused.empty()) rep.notes.push_back(shift_refused);
   rep.floor = noise_floor(runs, rep.before.params);
   rep.noise_n = rep.floor.total_n();
   const MfParams base{

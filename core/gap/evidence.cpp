@@ -184,4 +184,16 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit&
   return std::nullopt;
 }
 
+std::string tyre_shift_contradicted(const std::vector<Run>& runs, double shift_ratio) {
+  const RestSlip rest = pooled_rest_slip(runs);
+  if (rest.points < kOffsetMinRestPoints || shift_ratio == 0 ||
+      rest.mean / shift_ratio >= kOffsetMinRestShare || rest.mean - shift_ratio <= rest.uncertainty)
+    return {};
+  return fmt::format(
+      "the curve's foot sits off zero slip (by {:.2g}) but the wheel rolling free before the brake "
+      "read a slip of {:.2g} +- {:.1g} ({} samples at rest): not the tyre's own shift (its "
+      "free-rolling wheel rests at its foot), force the channel reads without slip",
+      shift_ratio, rest.mean, rest.uncertainty, rest.points);
+}
+
 }  // namespace brakefit::gap

@@ -1,6 +1,7 @@
 // The evidence only one effect leaves (issue 34): a brake threshold holds the wheel rolling free
 // while the pressure rises to it; a steep foot of a curve that is not a Magic Formula does not. A
-// slip offset reads as itself while the wheel rolls free; speed friction needs roller speeds apart.
+// slip offset reads as itself while the wheel rolls free, and so does the tyre's own shift; speed
+// friction needs roller speeds apart.
 // A first effect leaves no structure most of which no candidate explains (the fit-quality check).
 #include <gtest/gtest.h>
 
@@ -43,6 +44,16 @@ std::pair<gap::EffectScore, gap::Fit> candidate(gap::Effect e, const char* name,
   return {s, f};
 }
 
+/// A run whose samples at rest have this mean and standard deviation.
+gap::Run at_rest(double mean, std::size_t points, double sd = 2e-4) {
+  gap::Run r = rise(false);
+  const auto n = static_cast<double>(points);
+  r.rest_slip_sum = n * mean;
+  r.rest_slip_sq_sum = n * (sd * sd + mean * mean);
+  r.rest_slip_points = points;
+  return r;
+}
+
 }  // namespace
 
 TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
@@ -59,15 +70,6 @@ TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
 
 TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
   const auto [s, f] = candidate(gap::Effect::SlipOffset, "slip_offset_ratio", -6e-4);
-  // A run whose samples at rest have this mean and standard deviation.
-  auto at_rest = [](double mean, std::size_t points, double sd = 2e-4) {
-    gap::Run r = rise(false);
-    const auto n = static_cast<double>(points);
-    r.rest_slip_sum = n * mean;
-    r.rest_slip_sq_sum = n * (sd * sd + mean * mean);
-    r.rest_slip_points = points;
-    return r;
-  };
   // The rest shows the offset: named. It shows none (a steep foot fitted as an offset): refused.
   EXPECT_FALSE(gap::missing_evidence(s, f, 4, {at_rest(-5.8e-4, 100), at_rest(-6.1e-4, 100)}));
   const auto missing = gap::missing_evidence(s, f, 4, {at_rest(1e-5, 100), at_rest(-2e-5, 100)});
@@ -77,6 +79,22 @@ TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
   EXPECT_FALSE(gap::missing_evidence(s, f, 4, {at_rest(0, 4), at_rest(0, 4)}));
   const gap::Run noisy = at_rest(0, 20, 3e-3);
   EXPECT_FALSE(gap::missing_evidence(s, f, 4, {noisy, noisy}));
+}
+
+TEST(GapEvidence, TheTyresOwnShiftRestsAtItsFoot) {
+  // A free-rolling wheel has no brake force: a tyre shifted by -5e-4 rolls free at -5e-4.
+  EXPECT_EQ(gap::tyre_shift_contradicted({at_rest(-4.8e-4, 100), at_rest(-5.1e-4, 100)}, -5e-4),
+            "");
+  // Runs that rested at 0 while the foot sits at -5e-4: the channel read force without slip.
+  const std::string note =
+      gap::tyre_shift_contradicted({at_rest(1e-5, 150), at_rest(-2e-5, 150)}, -5e-4);
+  EXPECT_NE(note.find("not the tyre's own shift"), std::string::npos) << note;
+  // A foot above the rest reads less force than the slip gives: not what a threshold does.
+  EXPECT_EQ(gap::tyre_shift_contradicted({at_rest(1e-5, 150), at_rest(-2e-5, 150)}, 5e-4), "");
+  // Too few samples at rest, or a rest whose noise covers the shift: nothing to hold against it.
+  EXPECT_EQ(gap::tyre_shift_contradicted({at_rest(0, 4), at_rest(0, 4)}, -5e-4), "");
+  const gap::Run noisy = at_rest(0, 20, 3e-3);
+  EXPECT_EQ(gap::tyre_shift_contradicted({noisy, noisy}, -5e-4), "");
 }
 
 TEST(GapEvidence, SpeedFrictionOnARollerNeedsRunsAtSpeedsApart) {
