@@ -234,13 +234,14 @@ inline constexpr double kMinMagnitudeZ = 2.0;
 std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f, std::size_t at,
                                                 const std::vector<Run>& runs);
 /// The tyre's own horizontal shift moves the slip it rolls free at with its foot: a free-rolling
-/// wheel's brake force is zero. A foot `shift_ratio` below the slip the runs rested at (pooled;
-/// by more than its uncertainty, and not kOffsetMinRestShare of it) reads force where the wheel
-/// rolled free: a force channel that reads high from the brake's first moment (generator C's
-/// brake thresholds of 1.1-1.5 bar were taken as shifts of -5e-4 whose runs rested at 0 +-
-/// 3e-5), not the tyre's. (A foot above the rest reads less force than the slip gives, as a
-/// wheel's inertia does while the car slows: the effects are scored against the shifted baseline
-/// as before.) The note saying so, or empty.
+/// wheel's brake force is zero. Runs that rested at zero slip (pooled, within its uncertainty)
+/// show no shift of the tyre's; a foot `shift_ratio` below that (by more than the uncertainty)
+/// reads force while the wheel rolled free: a force channel that reads high from the brake's
+/// first moment (generator C's brake threshold of 1.43 bar was taken as a shift of -4.6e-4 whose
+/// runs rested at 2e-5 +- 1e-4), not the tyre. Not refused: a foot above the rest (less force
+/// than the slip gives, as a wheel's inertia does while the car slows), and a rest off zero (the
+/// tyre's own shift shows there; a baseline bent by an unmodelled effect, generator B's 1.24
+/// kg m^2 wheel, put its foot at -1.8e-4 over a rest at 2.2e-4 +- 7e-5). The note, or empty.
 std::string tyre_shift_contradicted(const std::vector<Run>& runs, double shift_ratio);
 /// Held-out folds at most: up to this many runs each is held out alone (leave one run out).
 inline constexpr std::size_t kMaxFolds = 6;

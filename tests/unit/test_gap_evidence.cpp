@@ -89,6 +89,9 @@ TEST(GapEvidence, TheTyresOwnShiftRestsAtItsFoot) {
   const std::string note =
       gap::tyre_shift_contradicted({at_rest(1e-5, 150), at_rest(-2e-5, 150)}, -5e-4);
   EXPECT_NE(note.find("not the tyre's own shift"), std::string::npos) << note;
+  // A rest off zero shows a shift of the tyre's own (the foot may be bent by another effect).
+  EXPECT_EQ(gap::tyre_shift_contradicted({at_rest(2.2e-4, 500), at_rest(2.3e-4, 500)}, -1.8e-4),
+            "");
   // A foot above the rest reads less force than the slip gives: not what a threshold does.
   EXPECT_EQ(gap::tyre_shift_contradicted({at_rest(1e-5, 150), at_rest(-2e-5, 150)}, 5e-4), "");
   // Too few samples at rest, or a rest whose noise covers the shift: nothing to hold against it.

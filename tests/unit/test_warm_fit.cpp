@@ -29,7 +29,9 @@ gap::Report expect_the_inertia_alone(double inertia_kgm2, std::uint64_t seed, bo
   }
   auto rep =
       gap::diagnose(runs, sim::pooled_start(runs), gap::calibrated_options(gap::Condition::Ground));
-  EXPECT_EQ(rep.verdict, std::vector<std::string>{"wheel_inertia"});
+  std::string notes;
+  for (const auto& n : rep.notes) notes += "\n  note: " + n;
+  EXPECT_EQ(rep.verdict, std::vector<std::string>{"wheel_inertia"}) << notes;
   const auto at = gap::param_offset(rep.accepted, gap::Effect::WheelInertia);
   EXPECT_TRUE(at);
   if (at) {
