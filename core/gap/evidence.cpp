@@ -186,8 +186,8 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit&
 
 std::string tyre_shift_contradicted(const std::vector<Run>& runs, double shift_ratio) {
   const RestSlip rest = pooled_rest_slip(runs);
-  if (rest.points < kOffsetMinRestPoints || shift_ratio == 0 ||
-      std::abs(rest.mean) > rest.uncertainty || rest.mean - shift_ratio <= rest.uncertainty)
+  if (rest.points < kOffsetMinRestPoints || std::abs(rest.mean) > rest.uncertainty ||
+      rest.mean - shift_ratio <= rest.uncertainty)
     return {};
   return fmt::format(
       "the curve's foot sits off zero slip (by {:.2g}) but the wheel rolling free before the brake "

@@ -237,11 +237,10 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit&
 /// wheel's brake force is zero. Runs that rested at zero slip (pooled, within its uncertainty)
 /// show no shift of the tyre's; a foot `shift_ratio` below that (by more than the uncertainty)
 /// reads force while the wheel rolled free: a force channel that reads high from the brake's
-/// first moment (generator C's brake threshold of 1.43 bar was taken as a shift of -4.6e-4 whose
-/// runs rested at 2e-5 +- 1e-4), not the tyre. Not refused: a foot above the rest (less force
-/// than the slip gives, as a wheel's inertia does while the car slows), and a rest off zero (the
-/// tyre's own shift shows there; a baseline bent by an unmodelled effect, generator B's 1.24
-/// kg m^2 wheel, put its foot at -1.8e-4 over a rest at 2.2e-4 +- 7e-5). The note, or empty.
+/// first moment (a threshold crossed at once), not the tyre. Not refused: a foot above the rest
+/// (less force than the slip gives, as a wheel's inertia does while the car slows), and a rest
+/// off zero (the tyre's own shift shows there, and a baseline bent by an effect not yet modelled
+/// can put its foot elsewhere). The note, or empty.
 std::string tyre_shift_contradicted(const std::vector<Run>& runs, double shift_ratio);
 /// Held-out folds at most: up to this many runs each is held out alone (leave one run out).
 inline constexpr std::size_t kMaxFolds = 6;

@@ -1,5 +1,6 @@
 """brakefit CLI: exit codes, JSON shape, error messages, SVG plots (run by ctest)."""
 import json
+import math
 import os
 import re
 import subprocess
@@ -26,6 +27,21 @@ def write(dirname, name, text):
     with open(path, "w") as f:
         f.write(text)
     return path
+
+
+def pac96(s, b, c, d, e):
+    """The Magic Formula (Pac96's longitudinal force), for exports the tests write themselves."""
+    x = b * s
+    return d * math.sin(c * math.atan(x - e * (x - math.atan(x))))
+
+
+def slip_on_rise(force_of, force_n, peak_s):
+    """The slip in [0, peak_s] at which force_of(slip) reaches force_n (bisection)."""
+    lo, hi = 0.0, peak_s
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if force_of(mid) < force_n else (lo, mid)
+    return lo
 
 
 def good_rows(n=10):

@@ -8,7 +8,7 @@ import random
 import tempfile
 import unittest
 
-from test_cli import run, svg_series, write
+from test_cli import pac96, run, slip_on_rise, svg_series, write
 from test_recorded import REC, recorded
 
 
@@ -19,8 +19,7 @@ def others_roller_export(rate_bar_per_s, seed, step_mps=0.0005, last_slip=0.266,
     B, C, D, E = 12.0, 1.6, 4000.0, 0.3
 
     def mf(s):
-        x = B * s
-        return D * math.sin(C * math.atan(x - E * (x - math.atan(x))))
+        return pac96(s, B, C, D, E)
 
     peak = max((i / 10000 for i in range(1, 5000)), key=mf)
     rng = random.Random(seed)
@@ -31,10 +30,7 @@ def others_roller_export(rate_bar_per_s, seed, step_mps=0.0005, last_slip=0.266,
     while True:
         t = i * 1e-3
         p = max(0.0, rate_bar_per_s * (t - 0.2))
-        lo, hi = 0.0, peak
-        for _ in range(50):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if mf(mid) < gain * p else (lo, mid)
+        lo = slip_on_rise(mf, gain * p, peak)
         if t_past is None and gain * p >= mf(peak):
             t_past = t
         if t_past is not None:  # a light wheel runs away; the brake holds the tyre's force

@@ -3,21 +3,18 @@ stiff tyre (B C D = 134 kN) 1.4 bar of gain, 84 N, is a slip of 6e-4, and the sl
 difference at the peak. The slip the wheel rested at before the brake tells them apart. The export
 is written here, not by brakefit's simulators."""
 import json
-import math
-import os
 import random
 import tempfile
 import unittest
 
-from test_cli import run, write
+from test_cli import pac96, run, slip_on_rise, write
 
 GAIN_N_PER_BAR = 60.0
 LOAD_N = 4000.0
 
 
-def mf(s, b=20.0, c=1.6, d=4200.0, e=0.2):
-    x = b * s
-    return d * math.sin(c * math.atan(x - e * (x - math.atan(x))))
+def mf(s):
+    return pac96(s, 20.0, 1.6, 4200.0, 0.2)
 
 
 def ground_stop(ramp_s, v0_kmh, p0_bar, seed):
@@ -39,11 +36,7 @@ def ground_stop(ramp_s, v0_kmh, p0_bar, seed):
         if t_past is None and GAIN_N_PER_BAR * p_cmd >= peak_n:
             t_past = t
         if t_past is None:  # the tyre's force is the brake's: the slip on the curve's rise
-            lo, hi = 0.0, peak_s
-            for _ in range(50):
-                mid = 0.5 * (lo + hi)
-                lo, hi = (mid, hi) if mf(mid) < GAIN_N_PER_BAR * p_cmd else (lo, mid)
-            s = lo
+            s = slip_on_rise(mf, GAIN_N_PER_BAR * p_cmd, peak_s)
         else:  # past the peak the wheel runs away to lock
             s = min(1.0, peak_s + 4.0 * (t - t_past))
         f_n = mf(s)
