@@ -135,8 +135,10 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
           r.exact() ? fmt::format(" (estimate {:.4g}, gap after / floor {:.2f}, before {:.2f})",
                                   r.estimate, ratio, before_ratio)
                     : fmt::format(" (gap before / floor {:.2f})", before_ratio));
-    if (!r.exact() && st.why)
+    if (!r.exact() && st.why) {
       for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
+      for (const auto& line : r.scores) std::cerr << "    " << line << "\n";
+    }
     if (said == "refused") {
       ++refused;
       std::cerr << fmt::format("[{}] refused ({} {}): {}\n", cname, inj.effect, inj.magnitude,

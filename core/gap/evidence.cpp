@@ -39,31 +39,6 @@ double dead_zone_slip_ratio(const std::vector<Run>& runs, double p0_bar, double 
   return points >= kMinPoints && expected > 0 ? excess / expected : NAN;
 }
 
-/// The runs' slip at rest pooled: its mean, and its uncertainty: three standard errors and the
-/// largest bias a quantised channel leaves (a speed held on one level is off by up to half a
-/// step, which the rest does not average out; a held reference's own bound), points.
-struct RestSlip {
-  double mean = 0, uncertainty = 0;
-  std::size_t points = 0;
-};
-RestSlip pooled_rest_slip(const std::vector<Run>& runs) {
-  double sum = 0, sq = 0, bound = 0;
-  std::size_t n = 0;
-  for (const Run& r : runs) {
-    sum += r.rest_slip_sum;
-    sq += r.rest_slip_sq_sum;
-    n += r.rest_slip_points;
-    const double v_mps = r.v_ref_mps.empty() ? 0.0 : r.v_ref_mps.front();
-    if (v_mps > 0)
-      bound =
-          std::max(bound, r.ref_bias_bound + 0.5 * (r.v_wheel_step_mps + r.v_ref_step_mps) / v_mps);
-  }
-  if (n == 0) return {};
-  const double mean = sum / static_cast<double>(n);
-  const double sd = std::sqrt(std::max(0.0, sq / static_cast<double>(n) - mean * mean));
-  return {mean, 3.0 * sd / std::sqrt(static_cast<double>(n)) + bound, n};
-}
-
 /// The fastest run's median reference speed over the slowest's.
 double roller_speed_spread(const std::vector<Run>& runs) {
   double lo = INFINITY, hi = 0;
@@ -78,6 +53,28 @@ double roller_speed_spread(const std::vector<Run>& runs) {
 }
 
 }  // namespace
+
+RestSlip pooled_rest_slip(const std::vector<const Run*>& runs) {
+  double sum = 0, sq = 0, bound = 0;
+  std::size_t n = 0;
+  for (const Run* r : runs) {
+    sum += r->rest_slip_sum;
+    sq += r->rest_slip_sq_sum;
+    n += r->rest_slip_points;
+    const double v_mps = r->v_ref_mps.empty() ? 0.0 : r->v_ref_mps.front();
+    if (v_mps > 0)
+      bound = std::max(bound,
+                       r->ref_bias_bound + 0.5 * (r->v_wheel_step_mps + r->v_ref_step_mps) / v_mps);
+  }
+  if (n == 0) return {};
+  const double mean = sum / static_cast<double>(n);
+  const double sd = std::sqrt(std::max(0.0, sq / static_cast<double>(n) - mean * mean));
+  return {mean, 3.0 * sd / std::sqrt(static_cast<double>(n)) + bound, n};
+}
+
+RestSlip pooled_rest_slip(const std::vector<Run>& runs) {
+  return pooled_rest_slip(pointers(runs));
+}
 
 void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double rest_bar) {
   r.rest_slip_sum = r.rest_slip_sq_sum = 0;
@@ -111,10 +108,51 @@ std::optional<double> magnitude_z(Effect e, const Fit& f, std::size_t at) {
   return std::abs(f.params[at]) / f.stderr_[at];
 }
 
+/// The slip the model's terms move the curve's foot by (a slip offset, a reference's bias, the
+/// tyre's own shift).
+double fitted_foot_ratio(const std::vector<Effect>& model, const Fit& f) {
+  double foot = 0;
+  for (const Effect m : {Effect::SlipOffset, Effect::ReferenceBias, Effect::TyreShift})
+    if (const auto at = param_offset(model, m); at && *at < f.params.size()) foot += f.params[*at];
+  return foot;
+}
+
+/// A threshold's force comes without slip, on a tyre that rolls free where the wheel rested. Runs
+/// that rested below the fitted curve's foot, by more than the rest's uncertainty and by a slip
+/// whose force (at the curve's initial stiffness) is a fair share of the threshold's, show a
+/// foot the model lacks: a slip offset reads there as itself, and its force at the foot is a
+/// threshold's force without slip too (generator B's ground offset of -0.002 was named a 1.4 bar
+/// threshold). A rest above the foot (a wheel that rolls with some resistance) is not its sign.
+std::optional<MissingEvidence> threshold_off_the_rest(const EffectScore& e,
+                                                      const std::vector<Effect>& model,
+                                                      const Fit& f, const std::vector<Run>& runs) {
+  const RestSlip rest = pooled_rest_slip(runs);
+  const double foot = fitted_foot_ratio(model, f);
+  if (rest.points < kOffsetMinRestPoints || foot - rest.mean <= rest.uncertainty) return {};
+  double gain_n_per_bar = 0;
+  for (const Run& r : runs)
+    gain_n_per_bar += r.brake_gain_n_per_bar / static_cast<double>(runs.size());
+  const double threshold_n = gain_n_per_bar * e.params[0].second;
+  const double stiffness_n = f.params[0] * f.params[1] * f.params[2];
+  const double rest_n = stiffness_n * (foot - rest.mean);
+  if (!(threshold_n > 0) || !(rest_n >= kThresholdMinRestForceShare * threshold_n)) return {};
+  return MissingEvidence{
+      fmt::format("a brake threshold of {:.2f} bar fits{{}} (held-out gain {:.3f}) but the wheel "
+                  "rolling free before the brake read a slip of {:.2g} +- {:.1g} ({} samples at "
+                  "rest), {:.2g} below the fitted curve's foot, where the curve gives {:.0f} N "
+                  "({:.0f} % of the threshold's {:.0f} N): a foot off zero slip (a slip offset) "
+                  "gives force without slip alike; not accepted",
+                  e.params[0].second, e.gain, rest.mean, rest.uncertainty, rest.points,
+                  foot - rest.mean, rest_n, 100 * rest_n / threshold_n, threshold_n),
+      "the wheel rested below the fitted curve's foot"};
+}
+
 }  // namespace
 
-std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f, std::size_t at,
+std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
+                                                const std::vector<Effect>& model, const Fit& f,
                                                 const std::vector<Run>& runs) {
+  const std::size_t at = param_offset(model, e.effect).value_or(f.params.size());
   if (const auto z = magnitude_z(e.effect, f, at); z && *z < kMinMagnitudeZ)
     return MissingEvidence{
         fmt::format("{} fits{{}} (held-out gain {:.3f}) at {} {:.3g} +- {:.2g}: within {:.1f} "
@@ -136,9 +174,12 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit&
                     100 * kCapMinEndSlopeRatio),
         "a flat-topped curve fits alike (no kink at the cap)"};
   }
-  // On the roller only: on the ground the other brakes slow the vehicle during the rise and the
-  // free wheel's slip moves with that (generator B's 3 bar ground dead zones read above the
-  // limit); no limit has been measured there.
+  if (e.effect == Effect::BrakeThreshold) {
+    if (auto missing = threshold_off_the_rest(e, model, f, runs)) return missing;
+  }
+  // The dead zone's free-rolling wheel, on the roller only: on the ground the other brakes slow the
+  // vehicle during the rise and the free wheel's slip moves with that (generator B's 3 bar ground
+  // dead zones read above the limit); no limit has been measured there.
   const bool roller = std::all_of(runs.begin(), runs.end(),
                                   [](const Run& r) { return r.bench == can::BenchKind::Roller; });
   if (e.effect == Effect::BrakeThreshold && roller) {

@@ -213,6 +213,15 @@ inline constexpr double kMinRefSpeedMps = 0.3;
 /// Run::rest_slip_*: the slip of the lead-in's samples at rest (pressure at most rest_bar, the
 /// reference moving), before the rise the run starts at.
 void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double rest_bar);
+/// The runs' slip at rest pooled: its mean, and its uncertainty: three standard errors and the
+/// largest bias a quantised channel leaves (a speed held on one level is off by up to half a
+/// step, which the rest does not average out; a held reference's own bound), points.
+struct RestSlip {
+  double mean = 0, uncertainty = 0;
+  std::size_t points = 0;
+};
+RestSlip pooled_rest_slip(const std::vector<const Run*>& runs);
+RestSlip pooled_rest_slip(const std::vector<Run>& runs);
 /// A slip offset reads as itself while the wheel rolls free: the slip at rest must carry at least
 /// this share of a fitted offset, unless the two agree within the rest slip's uncertainty
 /// (generator C's Burckhardt curves and load transfer were fitted with offsets of 5-7e-4 whose
@@ -231,7 +240,12 @@ inline constexpr std::size_t kOffsetMinRestPoints = 10;
 /// m/s^2, a load no car's pitch moves). The fit's errors assume independent residuals, so they
 /// are, if anything, small: the test errs towards naming.
 inline constexpr double kMinMagnitudeZ = 2.0;
-std::optional<MissingEvidence> missing_evidence(const EffectScore& e, const Fit& f, std::size_t at,
+/// A brake threshold whose runs rested below the fitted curve's foot: refused where the tyre's
+/// force at the rest (at its initial stiffness) is at least this share of the threshold's.
+inline constexpr double kThresholdMinRestForceShare = 0.5;
+/// `e` the candidate, the last effect of `model`, fitted as `f`.
+std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
+                                                const std::vector<Effect>& model, const Fit& f,
                                                 const std::vector<Run>& runs);
 /// The tyre's own horizontal shift moves the slip it rolls free at with its foot: a free-rolling
 /// wheel's brake force is zero. Runs that rested at zero slip (pooled, within its uncertainty)

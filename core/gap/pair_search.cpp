@@ -142,7 +142,7 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
     m->delta_bic = p.delta_bic;
     m->heldout_rmse_before_n = gap_before_n;
     m->heldout_rmse_after_n = p.heldout_n;
-    if (missing_evidence(*m, p.fit, *param_offset(p.model, m->effect), runs)) return std::nullopt;
+    if (missing_evidence(*m, p.model, p.fit, runs)) return std::nullopt;
   }
   return best;
 }

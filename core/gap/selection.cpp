@@ -203,9 +203,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       // without it a curve that is not a Magic Formula fits alike (generator C's Burckhardt
       // tyres were named cradle_cap in 28 of 30 roller sets).
       if (inside) {
-        const Fit& f = fits[order[k]];
-        const std::size_t at = f.params.size() - effect_params(e.effect).size();
-        if (const auto missing = missing_evidence(e, f, at, runs)) {
+        if (const auto missing = missing_evidence(e, models[order[k]], fits[order[k]], runs)) {
           inside = false;
           rep.notes.push_back(
               fmt::format(fmt::runtime(missing->note),

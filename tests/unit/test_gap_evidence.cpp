@@ -58,27 +58,57 @@ gap::Run at_rest(double mean, std::size_t points, double sd = 2e-4) {
 
 TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
   const auto [s, f] = candidate(gap::Effect::BrakeThreshold, "p0_bar", 2.0);
-  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {rise(true), rise(true)}).has_value());
-  const auto missing = gap::missing_evidence(s, f, 4, {rise(false), rise(false)});
+  EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {rise(true), rise(true)}).has_value());
+  const auto missing = gap::missing_evidence(s, {s.effect}, f, {rise(false), rise(false)});
   ASSERT_TRUE(missing.has_value());
   EXPECT_NE(missing->note.find("did not roll free below it"), std::string::npos);
   // A run that starts above the threshold shows no rise: nothing to hold against it.
   gap::Run late = rise(false);
   for (double& x : late.force_n) x += 200.0;
-  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {late, late}).has_value());
+  EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {late, late}).has_value());
+}
+
+TEST(GapEvidence, ABrakeThresholdsTyreRollsFreeWhereTheWheelRested) {
+  // A 2 bar threshold (120 N at 60 N/bar) on a curve of 80 kN initial stiffness whose foot is at
+  // zero slip; the runs rested at -2e-3, where that curve gives -160 N: an offset's force.
+  const auto [s, f] = candidate(gap::Effect::BrakeThreshold, "p0_bar", 2.0);
+  auto on_ground = [](double rest, std::size_t points) {
+    gap::Run r = at_rest(rest, points);
+    r.bench = can::BenchKind::Ground;
+    return r;
+  };
+  const auto missing =
+      gap::missing_evidence(s, {s.effect}, f, {on_ground(-2e-3, 200), on_ground(-2e-3, 200)});
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_NE(missing->note.find("below the fitted curve's foot"), std::string::npos)
+      << missing->note;
+  // The model carries the offset (a threshold beside it): the foot is where the wheel rested.
+  gap::Fit with_offset = f;
+  with_offset.params = {16.0, 1.6, 3125.0, 0.1, -2e-3, 2.0};
+  EXPECT_FALSE(gap::missing_evidence(s, {gap::Effect::SlipOffset, s.effect}, with_offset,
+                                     {on_ground(-2e-3, 200), on_ground(-2e-3, 200)}));
+  // A rest at zero; a rest above the foot (a wheel rolling against some resistance); a rest below
+  // it whose force is small beside the threshold's (-2e-4: 16 N); too few samples at rest.
+  for (const double rest : {0.0, 2e-3, -2e-4})
+    EXPECT_FALSE(
+        gap::missing_evidence(s, {s.effect}, f, {on_ground(rest, 200), on_ground(rest, 200)}))
+        << rest;
+  EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {on_ground(-2e-3, 4), on_ground(-2e-3, 4)}));
 }
 
 TEST(GapEvidence, ASlipOffsetMustReadAsItselfWhileTheWheelRollsFree) {
   const auto [s, f] = candidate(gap::Effect::SlipOffset, "slip_offset_ratio", -6e-4);
   // The rest shows the offset: named. It shows none (a steep foot fitted as an offset): refused.
-  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {at_rest(-5.8e-4, 100), at_rest(-6.1e-4, 100)}));
-  const auto missing = gap::missing_evidence(s, f, 4, {at_rest(1e-5, 100), at_rest(-2e-5, 100)});
+  EXPECT_FALSE(
+      gap::missing_evidence(s, {s.effect}, f, {at_rest(-5.8e-4, 100), at_rest(-6.1e-4, 100)}));
+  const auto missing =
+      gap::missing_evidence(s, {s.effect}, f, {at_rest(1e-5, 100), at_rest(-2e-5, 100)});
   ASSERT_TRUE(missing.has_value());
   EXPECT_NE(missing->note.find("rolling free before the brake"), std::string::npos);
   // Too few samples at rest to say, or a rest whose noise covers the offset: not refused.
-  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {at_rest(0, 4), at_rest(0, 4)}));
+  EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {at_rest(0, 4), at_rest(0, 4)}));
   const gap::Run noisy = at_rest(0, 20, 3e-3);
-  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {noisy, noisy}));
+  EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {noisy, noisy}));
 }
 
 TEST(GapEvidence, TheTyresOwnShiftRestsAtItsFoot) {
@@ -107,14 +137,14 @@ TEST(GapEvidence, SpeedFrictionOnARollerNeedsRunsAtSpeedsApart) {
     r.v_ref_mps.assign(r.t_s.size(), v_mps);
     return r;
   };
-  const auto missing = gap::missing_evidence(s, f, 4, {at_speed(1.39), at_speed(1.40)});
+  const auto missing = gap::missing_evidence(s, {s.effect}, f, {at_speed(1.39), at_speed(1.40)});
   ASSERT_TRUE(missing.has_value());
   EXPECT_NE(missing->note.find("one speed"), std::string::npos);
-  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {at_speed(0.6), at_speed(1.6)}));
+  EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {at_speed(0.6), at_speed(1.6)}));
   // On the ground a stop spans its speeds: not this check's to refuse.
   gap::Run ground = at_speed(11.0);
   ground.bench = can::BenchKind::Ground;
-  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {ground, ground}));
+  EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {ground, ground}));
 }
 
 TEST(GapEvidence, AMagnitudeTheFitCannotTellFromZeroIsNotNamed) {
@@ -122,17 +152,17 @@ TEST(GapEvidence, AMagnitudeTheFitCannotTellFromZeroIsNotNamed) {
   // of what the inertia's law left): 1.6 standard errors from no load transfer.
   auto [s, f] = candidate(gap::Effect::LoadTransfer, "dfz_per_decel_s2_per_m", -0.001);
   f.stderr_ = {0.1, 0.01, 30.0, 0.02, 0.00065};
-  const auto missing = gap::missing_evidence(s, f, 4, {rise(false), rise(false)});
+  const auto missing = gap::missing_evidence(s, {s.effect}, f, {rise(false), rise(false)});
   ASSERT_TRUE(missing.has_value());
   EXPECT_NE(missing->note.find("standard errors of no effect"), std::string::npos);
   f.stderr_[4] = 0.0002;  // 5 standard errors: measured
-  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {rise(false), rise(false)}).has_value());
+  EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {rise(false), rise(false)}).has_value());
   f.stderr_[4] = NAN;  // no covariance: nothing to test
-  EXPECT_FALSE(gap::missing_evidence(s, f, 4, {rise(false), rise(false)}).has_value());
+  EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {rise(false), rise(false)}).has_value());
   // A force cap has no zero to test against.
   auto [cs, cf] = candidate(gap::Effect::CradleCap, "cap_n", 3000.0);
   cf.stderr_ = {0.1, 0.01, 30.0, 0.02, 1e6};
-  const auto cap = gap::missing_evidence(cs, cf, 4, {rise(false), rise(false)});
+  const auto cap = gap::missing_evidence(cs, {cs.effect}, cf, {rise(false), rise(false)});
   EXPECT_TRUE(!cap || cap->note.find("standard errors") == std::string::npos);
 }
 
