@@ -182,7 +182,9 @@ int run(int argc, char** argv) {
     std::string command;
     for (int i = 0; i < argc; ++i) {
       if (i) command += ' ';
-      command.append(argv[i]);
+      // As typed: an argument with a space (a results key) in quotes, so the command reruns.
+      const std::string arg = argv[i];
+      command += arg.find(' ') == std::string::npos ? arg : '"' + arg + '"';
     }
     const double minutes =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() / 60;
