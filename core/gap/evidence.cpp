@@ -76,6 +76,13 @@ RestSlip pooled_rest_slip(const std::vector<Run>& runs) {
   return pooled_rest_slip(pointers(runs));
 }
 
+double fitted_foot_ratio(const std::vector<Effect>& model, const Fit& f) {
+  double foot = 0;
+  for (const Effect m : {Effect::SlipOffset, Effect::ReferenceBias, Effect::TyreShift})
+    if (const auto at = param_offset(model, m); at && *at < f.params.size()) foot += f.params[*at];
+  return foot;
+}
+
 void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double rest_bar) {
   r.rest_slip_sum = r.rest_slip_sq_sum = 0;
   r.rest_slip_points = 0;
@@ -106,15 +113,6 @@ std::optional<double> magnitude_z(Effect e, const Fit& f, std::size_t at) {
       !(f.stderr_[at] > 0))
     return std::nullopt;
   return std::abs(f.params[at]) / f.stderr_[at];
-}
-
-/// The slip the model's terms move the curve's foot by (a slip offset, a reference's bias, the
-/// tyre's own shift).
-double fitted_foot_ratio(const std::vector<Effect>& model, const Fit& f) {
-  double foot = 0;
-  for (const Effect m : {Effect::SlipOffset, Effect::ReferenceBias, Effect::TyreShift})
-    if (const auto at = param_offset(model, m); at && *at < f.params.size()) foot += f.params[*at];
-  return foot;
 }
 
 /// A threshold's force comes without slip, on a tyre that rolls free where the wheel rested. Runs

@@ -69,6 +69,10 @@ struct ParamRange {
 ParamRange param_range(Effect e, const EffectParam& ep, const std::vector<const Run*>& runs,
                        double peak, const std::vector<Effect>& model) {
   if (e == Effect::CradleCap) return {0.3 * peak, 2.0 * peak, peak};
+  if (e == Effect::SlipOffset && !runs.empty() && std::isfinite(runs.front()->foot_pin_ratio)) {
+    const double pin = runs.front()->foot_pin_ratio, tol = runs.front()->foot_pin_tol_ratio;
+    return {std::max(ep.lo, pin - tol), std::min(ep.hi, pin + tol), pin};
+  }
   if (is_nuisance(e)) {
     const double bound = std::max(1e-12, nuisance_bias_bound(runs, model));
     return {-bound, bound, 0.0};

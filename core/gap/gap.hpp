@@ -149,6 +149,9 @@ struct Run {
   /// samples). A slip offset reads there as itself (missing_evidence).
   double rest_slip_sum = 0.0, rest_slip_sq_sum = 0.0;
   std::size_t rest_slip_points = 0;
+  /// The slip offset held where the wheel rested (NaN: free): a fit's slip offset stays within
+  /// foot_pin_tol_ratio of foot_pin_ratio (threshold_at_rest).
+  double foot_pin_ratio = NAN, foot_pin_tol_ratio = 0.0;
   double ref_bias_removed = 0.0;  ///< the bias taken out (level_reference_biases)
   /// The bias the levelling wanted before its bound (the intercept's offset), and how that moves
   /// per second of a lag (levelled at the lag, the slip compared with the force is taken

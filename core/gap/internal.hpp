@@ -222,6 +222,9 @@ struct RestSlip {
 };
 RestSlip pooled_rest_slip(const std::vector<const Run*>& runs);
 RestSlip pooled_rest_slip(const std::vector<Run>& runs);
+/// The slip the model's terms move the curve's foot by (a slip offset, a reference's bias, the
+/// tyre's own shift), at the fit's values.
+double fitted_foot_ratio(const std::vector<Effect>& model, const Fit& f);
 /// A slip offset reads as itself while the wheel rolls free: the slip at rest must carry at least
 /// this share of a fitted offset, unless the two agree within the rest slip's uncertainty
 /// (generator C's Burckhardt curves and load transfer were fitted with offsets of 5-7e-4 whose
@@ -350,5 +353,32 @@ Run up_to(const Run& r, const std::vector<double>& x, double limit);
 /// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole
 /// runs' (gap_whole_n), after the gap below the cap (rep's baseline gap so far).
 void put_cap_first(Report& rep, double cap_n, double gap_whole_n);
+
+/// A brake threshold beside a named slip offset, told by the wheel's rest (threshold_at_rest).
+struct RestThreshold {
+  std::vector<Effect> model;  ///< the chosen model and the threshold
+  Fit fit;                    ///< with the offset held at the rest
+  double heldout_n = 0.0;
+  EffectScore score;
+  std::string note;
+};
+/// The offset's fitted foot must lie below the rest (beyond its uncertainty) by a slip whose
+/// force, at the curve's initial stiffness, is at least this many noise floors: a threshold's
+/// force stands above the noise (generator C's single offsets, on a 40 N floor, rest within 3 %
+/// of the fitted offset).
+inline constexpr double kRestThresholdMinFloors = 3.0;
+/// The threshold beside the held offset may leave this much more held out than the offset alone
+/// (the two fit one line; holding the offset costs a little).
+inline constexpr double kRestThresholdHeldoutSlack = 0.05;
+/// Where a named slip offset (no threshold named) was fitted below where the wheel rested, by a
+/// slip whose force stands above the noise: the chosen model and a brake threshold fitted with the
+/// offset held at the rest (pin_foot_at_rest), when the threshold is inside its range, has the
+/// evidence a threshold leaves and leaves about as little held out. The runs are not changed.
+std::optional<RestThreshold> threshold_at_rest(const std::vector<Run>& runs,
+                                               const std::vector<Effect>& chosen,
+                                               const Fit& current, double current_heldout_n,
+                                               double noise_n, const Fitter& fit);
+/// Holds every fit's slip offset at the runs' pooled rest slip, within its uncertainty.
+void pin_foot_at_rest(std::vector<Run>& runs);
 
 }  // namespace brakefit::gap

@@ -332,6 +332,19 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       current_heldout = p->heldout_n;
     }
   }
+  // A slip offset fitted below where the wheel rested carries a threshold's force without slip:
+  // the threshold is named beside it, and every later fit holds the offset at the rest.
+  if (auto t = threshold_at_rest(runs, chosen, current_fit, current_heldout, rep.noise_n, fit)) {
+    pin_foot_at_rest(runs);
+    all = pointers(runs);
+    t->score.accepted = true;
+    t->score.round = static_cast<int>(o.max_effects);
+    rep.effects.push_back(t->score);
+    rep.notes.push_back(std::move(t->note));
+    chosen = std::move(t->model);
+    current_fit = std::move(t->fit);
+    current_heldout = t->heldout_n;
+  }
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
   const std::vector<Effect> names = named(chosen);

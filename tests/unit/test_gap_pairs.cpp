@@ -142,3 +142,21 @@ TEST(GapPairs, AWheelsInertiaIsInALateChannelAsLateAsTheTyresForce) {
   EXPECT_NEAR(rep.after.params[*at(gap::Effect::WheelInertia)], 2.562, 0.03 * 2.562);
   EXPECT_NEAR(rep.after.params[*at(gap::Effect::TimeOffset)], 0.02852, 0.03 * 0.02852);
 }
+
+TEST(GapPairs, ABrakeThresholdBesideASlipOffsetIsToldByTheWheelsRest) {
+  // On the ground the dead zone and the foot's shift are one line in the linear region: the
+  // offset alone fits below where the wheel rested (B's pairs were said `slip_offset`). The rest
+  // shows the offset; what the fit put beyond it is the threshold's force without slip.
+  for (const double offset : {-0.009, 0.009}) {
+    sim::Injection inj{"brake_threshold", 1.3, gap::Condition::Ground, sim::Generator::B};
+    inj.effect2 = "slip_offset";
+    inj.magnitude2 = offset;
+    const auto t = sim::run_trial(inj, 23, gap::calibrated_options(inj.condition));
+    EXPECT_TRUE(t.correct()) << offset << ": " << ::testing::PrintToString(t.verdict);
+    EXPECT_NEAR(t.estimate, inj.magnitude, 0.15 * inj.magnitude) << offset;
+    EXPECT_NEAR(t.estimate2, offset, 0.05 * std::abs(offset));
+    EXPECT_TRUE(std::any_of(t.notes.begin(), t.notes.end(), [](const std::string& n) {
+      return n.find("below the slip the wheel rested at") != std::string::npos;
+    })) << offset;
+  }
+}
