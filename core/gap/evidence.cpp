@@ -54,26 +54,22 @@ double roller_speed_spread(const std::vector<Run>& runs) {
 
 }  // namespace
 
-RestSlip pooled_rest_slip(const std::vector<const Run*>& runs) {
+RestSlip pooled_rest_slip(const std::vector<Run>& runs) {
   double sum = 0, sq = 0, bound = 0;
   std::size_t n = 0;
-  for (const Run* r : runs) {
-    sum += r->rest_slip_sum;
-    sq += r->rest_slip_sq_sum;
-    n += r->rest_slip_points;
-    const double v_mps = r->v_ref_mps.empty() ? 0.0 : r->v_ref_mps.front();
+  for (const Run& r : runs) {
+    sum += r.rest_slip_sum;
+    sq += r.rest_slip_sq_sum;
+    n += r.rest_slip_points;
+    const double v_mps = r.v_ref_mps.empty() ? 0.0 : r.v_ref_mps.front();
     if (v_mps > 0)
-      bound = std::max(bound,
-                       r->ref_bias_bound + 0.5 * (r->v_wheel_step_mps + r->v_ref_step_mps) / v_mps);
+      bound =
+          std::max(bound, r.ref_bias_bound + 0.5 * (r.v_wheel_step_mps + r.v_ref_step_mps) / v_mps);
   }
   if (n == 0) return {};
   const double mean = sum / static_cast<double>(n);
   const double sd = std::sqrt(std::max(0.0, sq / static_cast<double>(n) - mean * mean));
   return {mean, 3.0 * sd / std::sqrt(static_cast<double>(n)) + bound, n};
-}
-
-RestSlip pooled_rest_slip(const std::vector<Run>& runs) {
-  return pooled_rest_slip(pointers(runs));
 }
 
 double fitted_foot_ratio(const std::vector<Effect>& model, const Fit& f) {
@@ -131,8 +127,7 @@ std::optional<MissingEvidence> threshold_off_the_rest(const EffectScore& e,
   for (const Run& r : runs)
     gain_n_per_bar += r.brake_gain_n_per_bar / static_cast<double>(runs.size());
   const double threshold_n = gain_n_per_bar * e.params[0].second;
-  const double stiffness_n = f.params[0] * f.params[1] * f.params[2];
-  const double rest_n = stiffness_n * (foot - rest.mean);
+  const double rest_n = f.slip_stiffness_n() * (foot - rest.mean);
   if (!(threshold_n > 0) || !(rest_n >= kThresholdMinRestForceShare * threshold_n)) return {};
   return MissingEvidence{
       fmt::format("a brake threshold of {:.2f} bar fits{{}} (held-out gain {:.3f}) but the wheel "
@@ -181,8 +176,7 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
   const bool roller = std::all_of(runs.begin(), runs.end(),
                                   [](const Run& r) { return r.bench == can::BenchKind::Roller; });
   if (e.effect == Effect::BrakeThreshold && roller) {
-    const double stiffness_n = f.params[0] * f.params[1] * f.params[2];
-    const double ratio = dead_zone_slip_ratio(runs, e.params[0].second, stiffness_n);
+    const double ratio = dead_zone_slip_ratio(runs, e.params[0].second, f.slip_stiffness_n());
     if (!(ratio > kDeadZoneMaxSlipRatio)) return std::nullopt;  // a dead zone, or no rise to see
     return MissingEvidence{
         fmt::format("a brake threshold of {:.2f} bar fits{{}} (held-out gain {:.3f}) but the wheel "

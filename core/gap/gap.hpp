@@ -207,6 +207,8 @@ struct Fit {
   double ssr = 0.0;
   std::size_t points = 0;
   double bic() const;
+  /// The curve's initial slip stiffness, B C D (N per unit slip).
+  double slip_stiffness_n() const { return params[0] * params[1] * params[2]; }
 };
 Fit fit_runs(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
              const MfParams& start);

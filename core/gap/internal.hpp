@@ -220,7 +220,6 @@ struct RestSlip {
   double mean = 0, uncertainty = 0;
   std::size_t points = 0;
 };
-RestSlip pooled_rest_slip(const std::vector<const Run*>& runs);
 RestSlip pooled_rest_slip(const std::vector<Run>& runs);
 /// The slip the model's terms move the curve's foot by (a slip offset, a reference's bias, the
 /// tyre's own shift), at the fit's values.

@@ -31,8 +31,7 @@ std::optional<RestThreshold> threshold_at_rest(const std::vector<Run>& runs,
   const RestSlip rest = pooled_rest_slip(runs);
   const double foot = fitted_foot_ratio(chosen, current);
   const double below = rest.mean - foot;
-  const double stiffness_n = current.params[0] * current.params[1] * current.params[2];
-  const double force_n = stiffness_n * below;
+  const double force_n = current.slip_stiffness_n() * below;
   if (rest.points < kOffsetMinRestPoints || below <= rest.uncertainty ||
       force_n < kRestThresholdMinFloors * noise_n)
     return std::nullopt;
