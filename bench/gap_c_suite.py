@@ -1,0 +1,214 @@
+#!/usr/bin/env python3
+"""Generator C's suite through `brakefit gap`, scored against its truth.
+
+    /usr/bin/python3 bench/gap_c_suite.py [--gen-c ../shared/gapgen/gen_c.py] [--seed 77]
+        [--build build/release] [--threads 2] [--results docs/gap_results.md]
+      (generator C imports numpy: Debian's python3-numpy, under /usr/bin/python3)
+
+Generator C (written outside the project) writes its plan of sets (94 at its default seed, 77):
+single effects on the roller and the ground, null sets and misspecified (Burckhardt) tyres, with
+OUT/truth.json. Each set's runs go through `brakefit gap --json` with the shipped gates, as a
+user would run them. A single effect counts as named when it is the first verdict (on the
+roller, where a set's runs share one speed, a lag and a delay count as one); a null set when the
+verdict is exactly ["none"]; a misspecified set when its first verdict is `none` or
+`unexplained`. A false claim is a catalogue name first on a set without an effect (nulls and
+misspecified). The magnitude error is the joint model's estimate (parameters_after) against the
+truth where the effect is named; load transfer in C's law's unit, h/L (C's vehicle weighs
+3.4 Fz0/g, so dFz/Fz per m/s^2 is 3.4 h/L / (2 g)).
+
+Prints the table, every miss and a brakefit.gap_c_suite/1 JSON; with --results, writes the table
+into that file between its `gap_c_suite` markers, the command and the commit at its head.
+"""
+import argparse
+import concurrent.futures as cf
+import datetime
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+G_MPS2 = 9.81
+C_MASS_PER_LOAD = 3.4  # C's vehicle: mass 3.4 Fz0 / g
+LAGS = ("relaxation_length", "time_offset")
+PARAM = {
+    "relaxation_length": "sigma_m",
+    "time_offset": "dt_s",
+    "brake_threshold": "p0_bar",
+    "slip_offset": "slip_offset_ratio",
+    "wheel_inertia": "inertia_kgm2",
+    "speed_friction": "lambda_mu_v",
+    "load_transfer": "dfz_per_decel_s2_per_m",
+}
+NO_EFFECT = ("none", "misspec")
+
+
+def log(msg):
+    print(f"[gap_c_suite] {msg}", file=sys.stderr, flush=True)
+
+
+def diagnose(brakefit, set_dir, case):
+    d = os.path.join(set_dir, case["case"])
+    runs = sorted(os.path.join(d, f) for f in os.listdir(d) if f.endswith(".csv"))
+    p = subprocess.run([brakefit, "gap", "--json", *runs], capture_output=True, text=True)
+    try:
+        return json.loads(p.stdout)
+    except json.JSONDecodeError:
+        return {"verdict": ["refused"], "error": p.stderr.strip().splitlines()[-1:]}
+
+
+def named_first(case, verdict):
+    e = case["effect"]
+    if not verdict:
+        return False
+    return verdict[0] == e or (case["bench"] == "roller" and e in LAGS and verdict[0] in LAGS)
+
+
+def estimate(case, doc):
+    """The joint model's estimate of the case's effect, in the truth's unit (None: not named)."""
+    after = doc.get("parameters_after") or {}
+    name = PARAM.get(case["effect"])
+    if name is None:
+        return None
+    if case["bench"] == "roller" and case["effect"] in LAGS and name not in after:
+        return None  # the other lag was named: no estimate of this one's magnitude
+    v = after.get(name)
+    if v is None:
+        return None
+    if case["effect"] == "slip_offset":
+        return -v  # C reads the wheel (1 + m) fast: the measured slip is the true one less m
+    if case["effect"] == "load_transfer":
+        return v * 2 * G_MPS2 / C_MASS_PER_LOAD  # dFz/Fz per m/s^2 -> h/L
+    return v
+
+
+def score(truth, docs):
+    rows = {"single": [0, 0], "load_transfer": [0, 0], "null": [0, 0], "misspec": [0, 0],
+            "false_claims": [0, 0]}
+    errors, misses, named = {}, [], []
+    per_effect = {}
+    for case, doc in zip(truth, docs):
+        e, v = case["effect"], doc.get("verdict", [])
+        if e == "none":
+            ok = v == ["none"]
+            rows["null"][0] += ok
+            rows["null"][1] += 1
+        elif e == "misspec":
+            ok = bool(v) and v[0] in ("none", "unexplained")
+            rows["misspec"][0] += ok
+            rows["misspec"][1] += 1
+        else:
+            ok = named_first(case, v)
+            rows["single"][0] += ok
+            rows["single"][1] += 1
+            key = f"{case['bench']} {e}"
+            per_effect.setdefault(key, [0, 0])
+            per_effect[key][0] += ok
+            per_effect[key][1] += 1
+            if e == "load_transfer":
+                rows["load_transfer"][0] += ok
+                rows["load_transfer"][1] += 1
+            est = estimate(case, doc) if ok else None
+            if est is not None and case["magnitude"] != 0:
+                errors.setdefault(e, []).append(abs(est - case["magnitude"]) / abs(case["magnitude"]))
+                named.append(f"{case['case']} {case['bench']} {e} {est:.4g} for "
+                             f"{case['magnitude']:.4g}")
+        if e in NO_EFFECT:
+            rows["false_claims"][1] += 1
+            rows["false_claims"][0] += bool(v) and v[0] not in ("none", "unexplained", "refused")
+        if not ok:
+            misses.append(f"{case['case']} {case['bench']} {e} {case['magnitude']:.4g} said {v}")
+    return rows, per_effect, errors, misses, named
+
+
+def pct(a, b):
+    return f"{a} of {b} ({100 * a / b:.0f} %)" if b else "–"
+
+
+def table(rows, per_effect, errors):
+    out = ["| sets | result |", "|---|---|"]
+    out.append(f"| single effects named first (lag and delay at one roller speed as one) | "
+               f"{pct(*rows['single'])} |")
+    for key in sorted(per_effect):
+        out.append(f"| {key} | {per_effect[key][0]} of {per_effect[key][1]} |")
+    out.append(f"| null sets `[\"none\"]` | {pct(*rows['null'])} |")
+    out.append(f"| misspecified (Burckhardt) `none` or `unexplained` | {pct(*rows['misspec'])} |")
+    out.append(f"| false claims on the sets without an effect (nulls and misspecified) | "
+               f"{pct(*rows['false_claims'])} |")
+    med = ", ".join(f"{e} {100 * statistics.median(v):.1f} % ({len(v)})"
+                    for e, v in sorted(errors.items()))
+    out.append(f"| magnitude error where named, median (sets) | {med} |")
+    return "\n".join(out)
+
+
+def write_results(path, text):
+    begin, end = "<!-- gap_c_suite begin -->", "<!-- gap_c_suite end -->"
+    with open(path) as f:
+        doc = f.read()
+    block = f"{begin}\n{text}\n{end}"
+    if begin in doc and end in doc:
+        doc = doc[: doc.index(begin)] + block + doc[doc.index(end) + len(end):]
+    else:
+        doc = doc.rstrip("\n") + "\n\n" + block + "\n"
+    with open(path, "w") as f:
+        f.write(doc)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--gen-c", default=os.path.join(ROOT, "..", "shared", "gapgen", "gen_c.py"))
+    ap.add_argument("--seed", type=int, default=77)
+    ap.add_argument("--build", default=os.path.join(ROOT, "build", "release"))
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--set", help="an existing suite directory (gen_c.py OUT) instead of a new one")
+    ap.add_argument("--results", help="markdown file to write the table into")
+    a = ap.parse_args()
+    brakefit = os.path.join(a.build, "cli", "brakefit")
+    if not os.access(brakefit, os.X_OK):
+        sys.exit(f"gap_c_suite: {brakefit} is not built (--build)")
+    start = time.time()
+    with tempfile.TemporaryDirectory(prefix="gap_c_suite-") as tmp:
+        set_dir = a.set or os.path.join(tmp, "set")
+        if not a.set:
+            if not os.path.exists(a.gen_c):
+                sys.exit(f"gap_c_suite: generator C's script {a.gen_c} is not there (--gen-c)")
+            log(f"writing generator C's suite (seed {a.seed}) to {set_dir}")
+            subprocess.run([sys.executable, a.gen_c, set_dir, "--seed", str(a.seed)], check=True,
+                           stdout=subprocess.DEVNULL)
+        truth_path = os.path.join(set_dir, "truth.json")
+        with open(truth_path) as f:
+            truth = json.load(f)
+        docs = [None] * len(truth)
+        with cf.ThreadPoolExecutor(a.threads) as ex:
+            futures = {ex.submit(diagnose, brakefit, set_dir, c): i for i, c in enumerate(truth)}
+            for n, fut in enumerate(cf.as_completed(futures), 1):
+                docs[futures[fut]] = fut.result()
+                if n % 10 == 0 or n == len(truth):
+                    log(f"{n}/{len(truth)} sets diagnosed")
+    rows, per_effect, errors, misses, named = score(truth, docs)
+    minutes = (time.time() - start) / 60
+    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
+                            capture_output=True, text=True).stdout.strip()
+    command = " ".join(["/usr/bin/python3", "bench/gap_c_suite.py"] + sys.argv[1:])
+    head = (f"<!-- written by `{command}` at commit {commit} ({datetime.date.today()}, "
+            f"{minutes:.0f} min; {len(truth)} sets of generator C, seed {a.seed}) -->")
+    text = head + "\n\n" + table(rows, per_effect, errors)
+    print(text)
+    print("\nmisses:\n" + "\n".join(misses or ["none"]))
+    print("\nestimates where named:\n" + "\n".join(named))
+    print(json.dumps({"schema": "brakefit.gap_c_suite/1", "version": "0.1.0", "commit": commit,
+                      "seed": a.seed, "sets": len(truth),
+                      "counts": {k: {"ok": v[0], "of": v[1]} for k, v in rows.items()},
+                      "per_effect": {k: {"named": v[0], "of": v[1]} for k, v in per_effect.items()},
+                      "magnitude_error_median": {e: statistics.median(v) for e, v in errors.items()},
+                      "misses": misses}))
+    if a.results:
+        write_results(a.results, text)
+        log(f"wrote the table into {a.results}")
+
+
+if __name__ == "__main__":
+    main()
