@@ -55,7 +55,10 @@ std::string source_commit() {
   std::string head = run("git -C '" + dir + "' rev-parse --short HEAD 2>/dev/null");
   while (!head.empty() && (head.back() == '\n' || head.back() == ' ')) head.pop_back();
   if (head.empty()) return "unknown (not a git tree)";
-  if (!run("git -C '" + dir + "' status --porcelain --untracked-files=no 2>/dev/null").empty())
+  // The docs are left out: the results files the referee writes are among them, and a run
+  // started while an earlier one's tables wait to be committed measures the same code.
+  if (!run("git -C '" + dir + "' status --porcelain --untracked-files=no -- . ':!docs' 2>/dev/null")
+           .empty())
     head += "-dirty";
   return head;
 }

@@ -11,7 +11,7 @@ namespace brakefit::bench {
 std::string results_markdown(const nlohmann::ordered_json& doc);
 
 /// `git rev-parse --short HEAD` of the source tree the referee was built from, "-dirty" when it
-/// has changes to tracked files (taken when the run starts).
+/// has changes to tracked files outside docs/ (taken when the run starts).
 std::string source_commit();
 
 /// Puts body into file between `<!-- gap_referee KEY begin -->` and `<!-- gap_referee KEY end
