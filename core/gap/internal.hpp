@@ -356,6 +356,7 @@ void put_cap_first(Report& rep, double cap_n, double gap_whole_n);
 /// A brake threshold beside a named slip offset, told by the wheel's rest (threshold_at_rest).
 struct RestThreshold {
   std::vector<Effect> model;  ///< the chosen model and the threshold
+  std::vector<Run> runs;      ///< the runs with every fit's offset held at the rest
   Fit fit;                    ///< with the offset held at the rest
   double heldout_n = 0.0;
   EffectScore score;
@@ -371,13 +372,11 @@ inline constexpr double kRestThresholdMinFloors = 3.0;
 inline constexpr double kRestThresholdHeldoutSlack = 0.05;
 /// Where a named slip offset (no threshold named) was fitted below where the wheel rested, by a
 /// slip whose force stands above the noise: the chosen model and a brake threshold fitted with the
-/// offset held at the rest (pin_foot_at_rest), when the threshold is inside its range, has the
+/// offset held at the rest (RestThreshold::runs), when the threshold is inside its range, has the
 /// evidence a threshold leaves and leaves about as little held out. The runs are not changed.
 std::optional<RestThreshold> threshold_at_rest(const std::vector<Run>& runs,
                                                const std::vector<Effect>& chosen,
                                                const Fit& current, double current_heldout_n,
                                                double noise_n, const Fitter& fit);
-/// Holds every fit's slip offset at the runs' pooled rest slip, within its uncertainty.
-void pin_foot_at_rest(std::vector<Run>& runs);
 
 }  // namespace brakefit::gap

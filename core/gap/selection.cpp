@@ -335,7 +335,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   // A slip offset fitted below where the wheel rested carries a threshold's force without slip:
   // the threshold is named beside it, and every later fit holds the offset at the rest.
   if (auto t = threshold_at_rest(runs, chosen, current_fit, current_heldout, rep.noise_n, fit)) {
-    pin_foot_at_rest(runs);
+    runs = std::move(t->runs);
     t->score.accepted = true;
     t->score.round = static_cast<int>(o.max_effects);
     rep.effects.push_back(t->score);

@@ -12,6 +12,9 @@
 
 namespace brakefit::gap {
 
+namespace {
+
+/// Holds every fit's slip offset at the runs' pooled rest slip, within its uncertainty.
 void pin_foot_at_rest(std::vector<Run>& runs) {
   const RestSlip rest = pooled_rest_slip(runs);
   for (Run& r : runs) {
@@ -19,6 +22,8 @@ void pin_foot_at_rest(std::vector<Run>& runs) {
     r.foot_pin_tol_ratio = std::max(rest.uncertainty, 1e-6);
   }
 }
+
+}  // namespace
 
 std::optional<RestThreshold> threshold_at_rest(const std::vector<Run>& runs,
                                                const std::vector<Effect>& chosen,
@@ -35,9 +40,10 @@ std::optional<RestThreshold> threshold_at_rest(const std::vector<Run>& runs,
   if (rest.points < kOffsetMinRestPoints || below <= rest.uncertainty ||
       force_n < kRestThresholdMinFloors * noise_n)
     return std::nullopt;
-  std::vector<Run> pinned = runs;
-  pin_foot_at_rest(pinned);
   RestThreshold t;
+  t.runs = runs;
+  pin_foot_at_rest(t.runs);
+  const std::vector<Run>& pinned = t.runs;
   t.model = chosen;
   t.model.push_back(Effect::BrakeThreshold);
   t.fit = fit(pointers(pinned), t.model);
