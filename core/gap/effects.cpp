@@ -136,13 +136,50 @@ EffectParam effect_param(Effect e) {
   return {"?", 0, 0, 0};
 }
 
+namespace {
+
+/// The body's pitch at the run's start: the deceleration at the run's first time from a
+/// Theil-Sen line through its first kPitchStartWindowS (at least kPitchStartSamples samples).
+/// The run starts from a wheel rolling free, so the body rests in pitch on the drag's
+/// deceleration; the first sample's derivative is taken at the smoothed speed's edge (10 m/s^2
+/// off on a 70 km/h run of generator C), and a lag started there carried it as load for
+/// 0.1-0.2 s. A line, not a mean: a brake that bites at once ramps the deceleration within the
+/// window (generator B: 0.2 to 1.3 m/s^2 in 40 ms), and its start is the line's foot.
+constexpr double kPitchStartWindowS = 0.04;
+constexpr std::size_t kPitchStartSamples = 5;
+
+double median_of(std::vector<double>& v) {
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+double pitch_start_decel(const Run& r) {
+  const std::size_t n = r.t_s.size();
+  std::size_t m = 0;
+  while (m < n && (m < kPitchStartSamples || r.t_s[m] - r.t_s[0] <= kPitchStartWindowS)) ++m;
+  if (m < 2) return m ? r.ref_decel_mps2[0] : 0.0;
+  std::vector<double> slopes;
+  slopes.reserve(m * (m - 1) / 2);
+  for (std::size_t i = 0; i < m; ++i)
+    for (std::size_t j = i + 1; j < m; ++j)
+      if (const double dt = r.t_s[j] - r.t_s[i]; dt > 0)
+        slopes.push_back((r.ref_decel_mps2[j] - r.ref_decel_mps2[i]) / dt);
+  const double slope = slopes.empty() ? 0.0 : median_of(slopes);
+  std::vector<double> feet(m);
+  for (std::size_t i = 0; i < m; ++i) feet[i] = r.ref_decel_mps2[i] - slope * (r.t_s[i] - r.t_s[0]);
+  return median_of(feet);
+}
+
+}  // namespace
+
 std::vector<double> pitch_lagged_decel(const Run& r, double lag_s, double mode_s2) {
   const std::size_t n = r.t_s.size();
   std::vector<double> out(n, 0.0);
   if (r.ref_decel_mps2.size() != n) return out;
   // Backward Euler on m x'' + lag x' + x = a (stable at any step; with m = 0 it is the implicit
-  // first-order lag). The mode starts at rest on the run's first deceleration.
-  double decel = n ? r.ref_decel_mps2[0] : 0.0, rate = 0.0;
+  // first-order lag). The mode starts at rest on the deceleration the run starts at.
+  double decel = n ? pitch_start_decel(r) : 0.0, rate = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     if (i > 0 && mode_s2 > 1e-9) {
       const double dt = r.t_s[i] - r.t_s[i - 1];
@@ -152,7 +189,7 @@ std::vector<double> pitch_lagged_decel(const Run& r, double lag_s, double mode_s
     } else if (i > 0 && lag_s > 1e-6) {  // implicit Euler: no exp per sample
       const double dt = r.t_s[i] - r.t_s[i - 1];
       decel += (r.ref_decel_mps2[i] - decel) * dt / (lag_s + dt);
-    } else
+    } else if (i > 0 || (lag_s <= 1e-6 && mode_s2 <= 1e-9))  // no lag: the deceleration itself
       decel = r.ref_decel_mps2[i];
     out[i] = decel;
   }

@@ -45,6 +45,25 @@ TEST(Pitch, AModeOvershootsAStepAsASecondOrderSystemDoes) {
   EXPECT_EQ(gap::pitch_lagged_decel(r, 0.0, 0.0), r.ref_decel_mps2);
 }
 
+TEST(Pitch, ThePitchStartsFromTheRunsFirstDecelerationsNotItsFirstSample) {
+  // A run starts from a wheel rolling free: the body rests in pitch. The first sample's derivative
+  // is taken at the smoothed speed's edge and can be far off (10 m/s^2 on a 70 km/h run of
+  // generator C); a lag started there carried it as load for a lag's time or two.
+  gap::Run r = step_run();
+  r.ref_decel_mps2[0] = 10.0;
+  for (const double mode_s2 : {0.0, 0.0162}) {
+    const auto x = gap::pitch_lagged_decel(r, 0.1, mode_s2);
+    for (std::size_t i = 0; i < 100; ++i) EXPECT_NEAR(x[i], 0.0, 0.1) << "sample " << i;
+    EXPECT_NEAR(x.back(), 1.0, 0.01);
+  }
+  // Without a lag the load follows the deceleration as read, the first sample included.
+  EXPECT_EQ(gap::pitch_lagged_decel(r, 0.0, 0.0), r.ref_decel_mps2);
+  // A run that starts already decelerating (its first 40 ms at 2 m/s^2) starts there.
+  gap::Run on = step_run();
+  for (double& d : on.ref_decel_mps2) d += 2.0;
+  EXPECT_NEAR(gap::pitch_lagged_decel(on, 0.1, 0.0)[1], 2.0, 1e-9);
+}
+
 TEST(Pitch, GeneratorBDrawsALagOrAModeForEachVehicle) {
   // Half the vehicles let the load follow 0-0.2 s behind the deceleration, half through a mode of
   // 1-1.5 Hz at damping 0.3-0.7; the station says which. The draw has its own stream: the rest of
