@@ -61,6 +61,10 @@ constexpr double kLockSlip = 0.9;
 constexpr double kRunawayMinSlip = 0.02;
 /// A runaway's jump stays: this many samples after it are all above the slip before it.
 constexpr std::size_t kRunawayHoldSamples = 2;
+/// Through a runaway the tyre's force falls from its peak (C's MF 6.1 tyres: 20-30 % by the lock)
+/// while a brake's line pressure or a wheel's inertial force rises: a channel that stays within
+/// 2 % of the force before the jump and ends 5 % under it shows the tyre.
+constexpr double kRunawayTyreRiseRatio = 1.02, kRunawayTyreFallRatio = 0.95;
 /// The brake is at rest below this pressure: a run starts at the event lead-in's last sample
 /// under it (the rise from rest tells a dead zone from a slip offset). Not earlier: over 50 ms
 /// of rest a pressure channel clipped at zero reads its noise as a mean force, a dead zone of a
@@ -130,12 +134,31 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
         if (slip_at(k) <= level) return false;
       return true;
     };
+    // A channel that falls through the runaway shows the tyre (a brake's line pressure rises on
+    // with the pedal while the wheel locks; a wheel's inertial force in the channel, I a / R^2,
+    // rises too): on the ground its runaway is the tyre's curve past the peak, kept up to the lock.
+    auto falls_through = [&](std::size_t i) {
+      if (c.bench != can::BenchKind::Ground) return false;
+      std::size_t j = i;
+      while (j < v_wheel.size() && slip_at(j) < kLockSlip) ++j;
+      if (j < i + kRunawayHoldSamples + 1) return false;
+      const double before = full.force_n[i - 1];
+      const double top = *std::max_element(full.force_n.begin() + static_cast<std::ptrdiff_t>(i),
+                                           full.force_n.begin() + static_cast<std::ptrdiff_t>(j));
+      return before > 0 && top <= kRunawayTyreRiseRatio * before &&
+             full.force_n[j - 1] < kRunawayTyreFallRatio * before;
+    };
+    bool kept_runaway = false;
     for (std::size_t i = 1; i < v_wheel.size(); ++i) {
       const double s0 = slip_at(i - 1);
       const double s1 = slip_at(i);
-      const bool runaway = o.runaway_slip_per_sample > 0 && s0 > kRunawayMinSlip &&
-                           s1 - s0 > o.runaway_slip_per_sample &&
-                           stays_up(i, s0 + o.runaway_slip_per_sample);
+      bool runaway = !kept_runaway && o.runaway_slip_per_sample > 0 && s0 > kRunawayMinSlip &&
+                     s1 - s0 > o.runaway_slip_per_sample &&
+                     stays_up(i, s0 + o.runaway_slip_per_sample);
+      if (runaway && falls_through(i)) {
+        kept_runaway = true;
+        runaway = false;
+      }
       if (runaway || s1 >= kLockSlip) {
         full.runaway = runaway;
         full.runaway_force_n = full.force_n[i - 1];

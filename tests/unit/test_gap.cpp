@@ -73,6 +73,44 @@ TEST(GapCondition, NoiseAlignmentStartStateAndLockCutOnASyntheticStop) {
   EXPECT_NEAR(r.initial_force_n, 66.7 * 2.0, 4.0);
 }
 
+TEST(GapCondition, AGroundRunawayIsKeptWhereTheChannelFallsWithTheTyreAndCutWhereItRises) {
+  // A ground stop at 500 Hz whose wheel runs away at 0.3 s (slip 0.12 -> lock in 30 ms). A brake's
+  // line pressure rises on through the runaway: not the tyre's force there, cut. A channel that
+  // falls with the slip (the tyre past its peak: a hub transducer, generator C's perfect brake)
+  // shows the tyre: kept up to the lock. On the roller the runaway is cut either way.
+  auto stop = [](bool tyre_channel, can::BenchKind bench) {
+    pipeline::Event e;
+    e.bench = bench;
+    for (int i = 0; i < 200; ++i) {
+      const double t = i * 2e-3;
+      const double slip = t < 0.3 ? 0.4 * t : std::min(0.95, 0.12 + 30 * (t - 0.3));
+      const double tyre_n = t < 0.3 ? 10000 * t : 3000 - 1000 * (slip - 0.12);
+      pipeline::Sample smp;
+      smp.t_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
+      smp.v_ref_mps = 15.0;
+      smp.v_wheel_mps = 15.0 * (1 - slip);
+      smp.pressure_bar = (tyre_channel ? tyre_n : 10000 * t) / 60.0;
+      e.samples.push_back(smp);
+    }
+    pipeline::Calibration c;
+    c.bench = bench;
+    c.brake_gain_n_per_bar = 60.0;
+    gap::ConditionOptions o;
+    o.max_points = 1000;
+    return gap::condition("stop", e, c, o);
+  };
+  const gap::Run brake = stop(false, can::BenchKind::Ground);
+  EXPECT_TRUE(brake.runaway);
+  EXPECT_LT(brake.t_s.back(), 0.304);
+  const gap::Run tyre = stop(true, can::BenchKind::Ground);
+  EXPECT_FALSE(tyre.runaway);
+  EXPECT_GT(tyre.t_s.back(), 0.32);                                       // past the runaway
+  EXPECT_LT(*std::max_element(tyre.slip.begin(), tyre.slip.end()), 0.9);  // but not locked
+  EXPECT_GT(*std::max_element(tyre.slip.begin(), tyre.slip.end()), 0.6);
+  const gap::Run roller = stop(true, can::BenchKind::Roller);
+  EXPECT_TRUE(roller.runaway);
+}
+
 TEST(Gap, WheelInertiaIsFoundFirst) {
   // Only the wheel's real inertia (1 kg m^2) differs from the 4-parameter model.
   sim::Scenario s = scenario("ideal_roller");
