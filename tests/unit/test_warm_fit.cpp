@@ -60,3 +60,56 @@ TEST(WarmFit, ABaselineFlattenedByAnUnmodelledForceAlsoStartsAtATyresShape) {
   // From the baseline's curve with E at 0: 1.227 at E 0.10, on the floor.
   expect_the_inertia_alone(1.2399055259801168, 57045, true, 0.03);
 }
+
+namespace {
+
+/// Three ground runs of one Magic Formula tyre that run on past the peak to 90 % slip (a channel
+/// that shows the tyre through the runaway), with +-30 N of uniform noise.
+std::vector<gap::Run> runs_to_the_lock(const MfParams& tyre) {
+  std::vector<gap::Run> runs;
+  std::uint64_t state = 1;
+  auto noise_n = [&] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5) * 60.0;
+  };
+  for (int k = 1; k <= 3; ++k) {
+    gap::Run r;
+    r.bench = can::BenchKind::Ground;
+    for (int i = 0; i < 300; ++i) {
+      const double runaway = i > 150 ? 1.0 + 0.1 * (i - 150) : 1.0;
+      const double slip = std::min(0.9, 5e-4 * i * k * runaway);
+      r.t_s.push_back(2e-3 * i * k);
+      r.slip.push_back(slip);
+      r.v_ref_mps.push_back(15.0);
+      r.force_n.push_back(mf_force_n(tyre, slip) + noise_n());
+      r.slip_sd.push_back(1e-4);
+      r.pressure_rate_bar_per_s.push_back(50.0);
+      r.ref_decel_mps2.push_back(5.0);
+      r.wheel_accel_mps2.push_back(-5.0);
+    }
+    r.noise_n = 17.0;
+    runs.push_back(std::move(r));
+  }
+  return runs;
+}
+
+}  // namespace
+
+TEST(WarmFit, TheBaselineIsFittedFromTheCandidatesStartsSoNoCandidateScoresItsLocalMinimum) {
+  // Runs to the lock have a second minimum, flat-topped (E near 1, C over 2), where a fit from a
+  // flat-topped start stops (1.9e6 N^2 against 2.7e5 at the tyre). A baseline fitted from that
+  // start alone stayed there while every candidate, fitted from the baseline's and the neutral
+  // starts, left it: all seven were scored with that minimum's BIC drop, whatever their effect
+  // (-380 to -449 on a null set of generator C's ground, which set the BIC gate other data were
+  // held to).
+  const MfParams tyre{18.2, 1.55, 7800.0, 0.26, 0, 0};
+  const auto runs = runs_to_the_lock(tyre);
+  const MfParams flat_topped{13.33, 2.117, 7757.0, 0.953, 0, 0};
+  ASSERT_GT(gap::fit_runs(gap::pointers(runs), {}, flat_topped).params[3], 0.9);  // the trap
+  auto o = gap::calibrated_options(gap::Condition::Ground);
+  o.gate_gain = 1e9;  // every candidate scored, none taken
+  const auto rep = gap::diagnose(runs, flat_topped, o);
+  EXPECT_NEAR(rep.before.params[3], tyre.E, 0.05);
+  for (const auto& e : rep.effects) EXPECT_GT(e.delta_bic, -40.0) << gap::to_string(e.effect);
+  EXPECT_EQ(rep.verdict, std::vector<std::string>{"none"});
+}
