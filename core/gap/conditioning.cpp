@@ -84,8 +84,7 @@ static int smoothing_half_window(const std::vector<double>& t_s, int samples) {
   std::vector<double> dt;
   for (std::size_t i = 1; i < t_s.size(); ++i) dt.push_back(t_s[i] - t_s[i - 1]);
   if (dt.empty()) return samples;
-  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
-  const double interval_s = dt[dt.size() / 2];
+  const double interval_s = upper_median(dt);
   if (!(interval_s > 0)) return samples;
   const int in_time = static_cast<int>(std::lround(kMaxSmoothHalfWindowS / interval_s));
   return std::clamp(in_time, std::min(kMinSmoothHalfWindow, samples), samples);
@@ -303,8 +302,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   if (c.speed_timing == "frame_mean") {
     std::vector<double> dts;
     for (std::size_t i = 1; i < full.t_s.size(); ++i) dts.push_back(full.t_s[i] - full.t_s[i - 1]);
-    std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
-    const double half = 0.5 * dts[dts.size() / 2];
+    const double half = 0.5 * upper_median(dts);
     auto align = [&](std::vector<double>& v) {
       std::vector<double> a(v.size());
       for (std::size_t i = 0; i + 1 < v.size(); ++i) a[i] = interp(full.t_s, v, full.t_s[i] + half);

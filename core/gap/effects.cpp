@@ -148,12 +148,6 @@ namespace {
 constexpr double kPitchStartWindowS = 0.04;
 constexpr std::size_t kPitchStartSamples = 5;
 
-double median_of(std::vector<double>& v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 double pitch_start_decel(const Run& r) {
   const std::size_t n = r.t_s.size();
   std::size_t m = 0;
@@ -165,10 +159,10 @@ double pitch_start_decel(const Run& r) {
     for (std::size_t j = i + 1; j < m; ++j)
       if (const double dt = r.t_s[j] - r.t_s[i]; dt > 0)
         slopes.push_back((r.ref_decel_mps2[j] - r.ref_decel_mps2[i]) / dt);
-  const double slope = slopes.empty() ? 0.0 : median_of(slopes);
+  const double slope = slopes.empty() ? 0.0 : upper_median(slopes);
   std::vector<double> feet(m);
   for (std::size_t i = 0; i < m; ++i) feet[i] = r.ref_decel_mps2[i] - slope * (r.t_s[i] - r.t_s[0]);
-  return median_of(feet);
+  return upper_median(feet);
 }
 
 }  // namespace

@@ -45,9 +45,9 @@ double roller_speed_spread(const std::vector<Run>& runs) {
   for (const Run& r : runs) {
     if (r.v_ref_mps.empty()) continue;
     std::vector<double> v = r.v_ref_mps;
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    lo = std::min(lo, v[v.size() / 2]);
-    hi = std::max(hi, v[v.size() / 2]);
+    const double mid = upper_median(v);
+    lo = std::min(lo, mid);
+    hi = std::max(hi, mid);
   }
   return hi > 0 && lo > 0 ? hi / lo : 1.0;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the diagnosis's own files (conditioning, effects, fits, selection, cradle cap,
 // the two modes); not part of the public interface in gap.hpp.
+#include <algorithm>
 #include <array>
 #include <functional>
 #include <optional>
@@ -63,6 +64,13 @@ std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_
 std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x);
 /// Linear interpolation of x(t) at `at`, held at the ends.
 double interp(const std::vector<double>& t, const std::vector<double>& x, double at);
+/// The middle of v (of an even count, the upper of the two middles), by partial sorting in place:
+/// the robust centre the conditioning's noise, step and speed estimates share. Not empty.
+inline double upper_median(std::vector<double>& v) {
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
 
 /// A channel's noise: the robust scale of its second differences, at least step/sqrt(12); step
 /// is its quantisation step (0: not quantised).

@@ -65,8 +65,7 @@ ChannelNoise channel_noise(const std::vector<double>& x) {
   std::vector<double> d2;
   for (std::size_t i = 1; i + 1 < x.size(); ++i)
     d2.push_back(std::abs(x[i + 1] - 2 * x[i] + x[i - 1]));
-  std::nth_element(d2.begin(), d2.begin() + static_cast<long>(d2.size() / 2), d2.end());
-  const double random_sd = d2[d2.size() / 2] / 0.6745 / std::sqrt(6.0);
+  const double random_sd = upper_median(d2) / 0.6745 / std::sqrt(6.0);
   // Quantisation: the smallest non-zero step, if (nearly) every non-zero step is a whole
   // multiple of it.
   double scale = 0;

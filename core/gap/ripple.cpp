@@ -282,9 +282,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   std::array<double, 2> amplitude{};
   for (std::size_t e = 0; e < 2; ++e) {
     if (amps[e].empty()) continue;
-    std::nth_element(amps[e].begin(), amps[e].begin() + static_cast<long>(amps[e].size() / 2),
-                     amps[e].end());
-    amplitude[e] = amps[e][amps[e].size() / 2];
+    amplitude[e] = upper_median(amps[e]);
   }
   // Pass 2: shorter runs (and longer ones whose own estimate did not pass) take that amplitude
   // and their phase from a regression with a linear trend, when that regression's own amplitude

@@ -36,11 +36,9 @@ std::optional<double> smoothed_noise_sd(const std::vector<double>& x, int half_w
        i + static_cast<std::size_t>(wide) < x.size(); ++i)
     d.push_back(a[i] - b[i]);
   std::vector<double> dev = d;
-  std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
-  const double med = dev[dev.size() / 2];
+  const double med = upper_median(dev);
   for (double& v : dev) v = std::abs(v - med);
-  std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
-  const double sd_d = dev[dev.size() / 2] / 0.6745;
+  const double sd_d = upper_median(dev) / 0.6745;
   const auto wa = sg_weights(half_window), wb = sg_weights(wide);
   double aa = 0, ab = 0, bb = 0;
   for (double w : wa) aa += w * w;
