@@ -162,3 +162,24 @@ TEST(GapPairs, ABrakeThresholdBesideASlipOffsetIsToldByTheWheelsRest) {
     })) << offset;
   }
 }
+
+TEST(GapPairs, AnEffectIsNotTakenWhereItPushesAnEffectNamedBeforeItToItsRangesEnd) {
+  // The referee's ground pair 33 (generator A, seed 1): a 0.028 s time offset with a slip offset.
+  // Load transfer leads (it takes the offset's bend); refitted beside a brake threshold or a slip
+  // offset in round 2 its load ran to the end of its range. That joint fit was taken, and the set
+  // was said `load_transfer, brake_threshold, relaxation_length, unexplained`: each added name
+  // traded the first one's law for its own.
+  const auto c = gap::Condition::Ground;
+  Rng rng(1 + 300 * static_cast<std::uint64_t>(c) + 7);
+  sim::Injection inj;
+  for (int t = 0; t <= 33; ++t) inj = sim::draw_pair(rng, c, sim::Generator::A);
+  ASSERT_EQ(inj.effect, "slip_offset");
+  ASSERT_EQ(inj.effect2, "time_offset");
+  const auto res =
+      sim::run_trial(inj, 1000 + 700'000 + 33 + 100'000 * static_cast<std::uint64_t>(c),
+                     gap::calibrated_options(c));
+  std::string why;
+  for (const auto& s : res.scores) why += "\n  " + s;
+  for (const char* e : {"brake_threshold", "slip_offset", "relaxation_length"})
+    EXPECT_EQ(std::count(res.verdict.begin(), res.verdict.end(), e), 0) << e << why;
+}
