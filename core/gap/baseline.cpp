@@ -24,7 +24,7 @@ double mean_speed_mps(const Run& r) {
 }  // namespace
 
 Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params) {
-  const MfParams m{params[0], params[1], params[2], params[3], 0, 0};
+  const MfParams m = curve_of(params);
   Floor fl;
   // The slip's noise is measured on the run's own slip (4 wide windows: 130 samples at 1 kHz).
   // Shorter runs (a 60 bar/s roller stop of generator B's relaxing tyre lasts 50 ms, a ground
@@ -88,7 +88,7 @@ std::string borrowed_noise_note(const Floor& fl) {
 /// Where: residual of the 4-parameter model by slip region, by phase, by run.
 std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector<double>& params,
                                  const std::vector<Effect>& baseline) {
-  const MfParams base{params[0], params[1], params[2], params[3], 0, 0};
+  const MfParams base = curve_of(params);
   std::vector<WhereRow> out;
   const double peak_slip = mf_peak(base, 1.0).slip_ratio;
   std::vector<std::pair<std::string, double>> acc;

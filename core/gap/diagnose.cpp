@@ -174,19 +174,17 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   // the baseline's distortion cannot trap: wheel inertia on the ground pulled the baseline to
   // E 0.92, from where the fit with the effect stopped in a local minimum at 2x the noise.
   const MfParams neutral = neutral_start(runs);
-  auto curve_of = [](const Fit& f) {
-    return MfParams{f.params[0], f.params[1], f.params[2], f.params[3], 0, 0};
-  };
   // The baseline itself from the same starts: fitted from one start it can stop in a local
   // minimum that every candidate's fit (from two) leaves, and then every candidate, whatever
   // its effect, is scored with that minimum's BIC drop (up to 400 on a null set of generator C's
   // ground, which set the BIC gate other data are held to).
-  if (Fit refit = WarmFitter(curve_of(rep.before), neutral)(pointers(runs), rep.baseline_effects);
+  if (Fit refit =
+          WarmFitter(curve_of(rep.before.params), neutral)(pointers(runs), rep.baseline_effects);
       refit.ssr < rep.before.ssr)
     rep.before = std::move(refit);
   rep.floor = noise_floor(runs, rep.before.params);
   rep.noise_n = rep.floor.total_n();
-  const MfParams base = curve_of(rep.before);
+  const MfParams base = curve_of(rep.before.params);
   WarmFitter warm(base, neutral);
   const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
     return warm(train, e);
@@ -288,8 +286,7 @@ Report diagnose_transfer(const std::vector<Run>& roller, const std::vector<Run>&
                              "the roller fit says nothing there)",
                              100 * max_slip, dropped, total));
 
-  const MfParams base{
-      roller_fit.params[0], roller_fit.params[1], roller_fit.params[2], roller_fit.params[3], 0, 0};
+  const MfParams base = curve_of(roller_fit.params);
   const Fitter fit = [&](const std::vector<const Run*>& train, const std::vector<Effect>& e) {
     return fit_effects(train, e, base);  // the roller's B, C, D, E held
   };

@@ -41,6 +41,15 @@ bool at_bound(double v, const EffectParam& p) {
   return (!p.lo_is_physical && v <= p.lo + tol) || v >= p.hi - tol;
 }
 
+std::optional<std::size_t> param_at_bound(const std::vector<Effect>& model, Effect e,
+                                          const Fit& f) {
+  const auto at = param_offset(model, e);
+  const auto eps = effect_params(e);
+  for (std::size_t j = 0; at && j < eps.size(); ++j)
+    if (at_bound(f.params.at(*at + j), eps[j])) return j;
+  return std::nullopt;
+}
+
 double structure_left_share(double before_n, double after_n, double noise_n) {
   const double before = before_n * before_n - noise_n * noise_n;
   if (!(before > 0)) return 1.0;

@@ -64,6 +64,10 @@ std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_
 std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x);
 /// Linear interpolation of x(t) at `at`, held at the ends.
 double interp(const std::vector<double>& t, const std::vector<double>& x, double at);
+/// The Magic Formula of a fit's (or parameter vector's) first four: B, C, D, E.
+inline MfParams curve_of(const std::vector<double>& params) {
+  return MfParams{params[0], params[1], params[2], params[3], 0, 0};
+}
 /// The middle of v (of an even count, the upper of the two middles), by partial sorting in place:
 /// the robust centre the conditioning's noise, step and speed estimates share. Not empty.
 inline double upper_median(std::vector<double>& v) {
@@ -325,6 +329,9 @@ FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n
 
 /// A parameter at the end of its physical range (a lower end that is physical, a lag of 0, aside).
 bool at_bound(double v, const EffectParam& p);
+/// The first of effect e's parameters that its fit f (of model) left at the end of its range:
+/// its index among effect_params(e) (none: all inside, or e not in the model).
+std::optional<std::size_t> param_at_bound(const std::vector<Effect>& model, Effect e, const Fit& f);
 
 /// Two effects named together that neither explains alone (pair_search.cpp).
 struct PairFound {

@@ -30,12 +30,7 @@ bool lag_and_delay(Effect a, Effect b) {
 }
 
 bool inside(const std::vector<Effect>& model, Effect e, const Fit& f) {
-  const auto at = param_offset(model, e);
-  if (!at) return false;
-  const auto eps = effect_params(e);
-  for (std::size_t j = 0; j < eps.size(); ++j)
-    if (at_bound(f.params.at(*at + j), eps[j])) return false;
-  return true;
+  return param_offset(model, e) && !param_at_bound(model, e, f);
 }
 
 EffectScore member(Effect e, const std::vector<Effect>& model, const Fit& f) {

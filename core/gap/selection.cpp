@@ -188,22 +188,20 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       // The effects named before it, refitted beside it, stay inside their ranges too: a joint
       // fit that pushes one of them to its end (load transfer's stiffness ratio to 0 beside a
       // threshold, where a time offset was the cause) trades that effect's law for the new one.
-      for (Effect prior : models[order[k]]) {
+      const std::vector<Effect>& model = models[order[k]];
+      for (Effect prior : model) {
         if (!inside || prior == e.effect || is_nuisance(prior)) continue;
-        const auto off = param_offset(models[order[k]], prior);
-        const auto prior_eps = effect_params(prior);
-        for (std::size_t j = 0; off && j < prior_eps.size() && inside; ++j) {
-          const double v = fits[order[k]].params.at(*off + j);
-          if (!at_bound(v, prior_eps[j])) continue;
-          inside = false;
-          rep.notes.push_back(fmt::format(
-              "{} (round {}, after {}) would explain part of the residual only with {}'s {} at "
-              "the end of its physical range ({:.4g}): not accepted",
-              to_string(e.effect), round + 1, after_names(), to_string(prior), prior_eps[j].name,
-              v));
-          e.decision = fmt::format("{}'s {} at the end of its physical range ({:.4g})",
-                                   to_string(prior), prior_eps[j].name, v);
-        }
+        const auto j = param_at_bound(model, prior, fits[order[k]]);
+        if (!j) continue;
+        inside = false;
+        const char* name = effect_params(prior)[*j].name;
+        const double v = fits[order[k]].params.at(*param_offset(model, prior) + *j);
+        rep.notes.push_back(fmt::format(
+            "{} (round {}, after {}) would explain part of the residual only with {}'s {} at the "
+            "end of its physical range ({:.4g}): not accepted",
+            to_string(e.effect), round + 1, after_names(), to_string(prior), name, v));
+        e.decision = fmt::format("{}'s {} at the end of its physical range ({:.4g})",
+                                 to_string(prior), name, v);
       }
       // A slip offset no larger than the nuisance terms take (half a quantisation step of a
       // constant reference, and the tyre's own shift when the baseline carries it) is that
