@@ -343,11 +343,12 @@ struct PairFound {
   double gain_over_a = 0.0, gain_over_b = 0.0;  ///< the pair against b alone, against a alone
   EffectScore a, b;                             ///< the members, at the pair fit's values
 };
-/// When forward selection leaves a structured gap (left_n): the leading round-1 candidates (by
-/// held-out gain and by BIC drop) fitted in pairs, lag and delay never together. The best pair
-/// held out is returned when it explains at least min_first_gain of the baseline's gap, beats
-/// what is left by the gain gate, drops the BIC by twice the margin, each member gains the gain
-/// gate over the other alone, and each has the evidence only it leaves.
+/// When forward selection leaves a structured gap (left_n): every pair of round 1's candidates,
+/// lag and delay never together, fitted jointly. Of those with both members inside their
+/// ranges, the best held out that passes is returned: it explains at least min_first_gain of
+/// the baseline's gap, beats what is left by the gain gate, drops the BIC by twice the margin,
+/// each member gains the gain gate over the other alone, and each has the evidence only it
+/// leaves.
 std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::vector<Effect>& base,
                                       const std::vector<EffectScore>& round1, double gap_before_n,
                                       double left_n, const Fit& base_fit, const Fitter& fit,
@@ -382,6 +383,11 @@ struct RestThreshold {
 /// force stands above the noise (generator C's single offsets, on a 40 N floor, rest within 3 %
 /// of the fitted offset).
 inline constexpr double kRestThresholdMinFloors = 3.0;
+/// ...and above what a free-rolling wheel carries at its rest: rolling resistance, drag and bind
+/// (30-45 N on a car's wheel, physics.md: about 1 % of the wheel's load, read here as the curve's
+/// peak D) put the rest on the tyre's curve above its foot. A tyre's offset with a lag fitted
+/// beside it rests 11 N (0.3 % of D) above its fitted foot, where a 1.3 bar threshold leaves 129 N.
+inline constexpr double kRestDragPeakRatio = 0.012;
 /// The threshold beside the held offset may leave this much more held out than the offset alone
 /// (the two fit one line; holding the offset costs a little).
 inline constexpr double kRestThresholdHeldoutSlack = 0.05;

@@ -37,8 +37,9 @@ std::optional<RestThreshold> threshold_at_rest(const std::vector<Run>& runs,
   const double foot = fitted_foot_ratio(chosen, current);
   const double below = rest.mean - foot;
   const double force_n = current.slip_stiffness_n() * below;
+  const double drag_n = kRestDragPeakRatio * std::abs(curve_of(current.params).D);
   if (rest.points < kOffsetMinRestPoints || below <= rest.uncertainty ||
-      force_n < kRestThresholdMinFloors * noise_n)
+      force_n < std::max(kRestThresholdMinFloors * noise_n, drag_n))
     return std::nullopt;
   RestThreshold t;
   t.runs = runs;

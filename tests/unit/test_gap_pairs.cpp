@@ -180,6 +180,14 @@ TEST(GapPairs, AnEffectIsNotTakenWhereItPushesAnEffectNamedBeforeItToItsRangesEn
                      gap::calibrated_options(c));
   std::string why;
   for (const auto& s : res.scores) why += "\n  " + s;
-  for (const char* e : {"brake_threshold", "slip_offset", "relaxation_length"})
+  for (const char* e : {"brake_threshold", "relaxation_length", "load_transfer"})
     EXPECT_EQ(std::count(res.verdict.begin(), res.verdict.end(), e), 0) << e << why;
+  // Alone the time offset fits short (0.0098 s: the offset's shift takes part of the delay) and
+  // the slip offset's BIC drop ranks fifth: the two are found together only where every pair of
+  // round 1's candidates is tried, and the pair kept is the best one held out that passes. The
+  // wheel rests 11 N above the pair's fitted foot (3.5 floors): less than a rolling wheel carries
+  // at rest, so no brake threshold is read from it (counted above).
+  EXPECT_TRUE(res.correct()) << ::testing::PrintToString(res.verdict) << why;
+  EXPECT_NEAR(res.estimate, inj.magnitude, 0.15 * std::abs(inj.magnitude));
+  EXPECT_NEAR(res.estimate2, inj.magnitude2, 0.15 * inj.magnitude2);
 }
