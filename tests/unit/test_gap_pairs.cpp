@@ -191,3 +191,26 @@ TEST(GapPairs, AnEffectIsNotTakenWhereItPushesAnEffectNamedBeforeItToItsRangesEn
   EXPECT_NEAR(res.estimate, inj.magnitude, 0.15 * std::abs(inj.magnitude));
   EXPECT_NEAR(res.estimate2, inj.magnitude2, 0.15 * inj.magnitude2);
 }
+
+TEST(GapPairs, ThePairNamedIsTheBestHeldOutThatPassesNotTheBestHeldOut) {
+  // The referee's roller pair 5 (generator B, seed 1): a slip offset with a 0.15 m relaxation.
+  // One effect at a time a lag is named and a structured gap left. In pairs, a relaxation with a
+  // brake threshold leaves the least held out but fails the gates; a lag with the slip offset,
+  // next held out, passes. Taking only the best held out and checking it, the set stayed
+  // `unexplained` with the offset unnamed (this test fails so).
+  const auto c = gap::Condition::Roller;
+  Rng rng(1 + 300 * static_cast<std::uint64_t>(c) + 7);
+  sim::Injection inj;
+  for (int t = 0; t <= 5; ++t) inj = sim::draw_pair(rng, c, sim::Generator::B);
+  ASSERT_EQ(inj.effect, "slip_offset");
+  ASSERT_EQ(inj.effect2, "relaxation_length");
+  const auto res = sim::run_trial(inj, 1000 + 700'000 + 5 + 100'000 * static_cast<std::uint64_t>(c),
+                                  gap::calibrated_options(c));
+  std::string why;
+  for (const auto& s : res.scores) why += "\n  " + s;
+  for (const auto& s : res.notes) why += "\n  " + s;
+  EXPECT_TRUE(res.correct()) << ::testing::PrintToString(res.verdict) << why;
+  EXPECT_TRUE(std::any_of(res.notes.begin(), res.notes.end(), [](const std::string& n) {
+    return n.find("fitted together") != std::string::npos;
+  })) << why;
+}
