@@ -15,24 +15,52 @@ namespace brakefit::gap {
 
 namespace {
 
+/// The line's force at a run's point: the channel with a declared pressure filter (5-20 ms)
+/// undone. On a fast ramp the channel reads a bar low, and the wheel moves where the line, not
+/// the channel, has passed p0.
+double line_force_n(const Run& r, std::size_t i) {
+  const bool rate = r.pressure_rate_bar_per_s.size() == r.force_n.size();
+  return r.force_n[i] +
+         (rate ? r.pressure_filter_s * r.brake_gain_n_per_bar * r.pressure_rate_bar_per_s[i] : 0.0);
+}
+
 /// The dead zone's evidence: the slip, above its value at rest, at the points of each run's rise
-/// from rest whose force lies between kLo and kHi of the threshold (before it first passed the
-/// threshold), against what the fitted curve's initial stiffness B C D gives at that force. A
+/// from rest whose line force lies between kLo and kHi of the threshold (before it first passed
+/// the threshold), against what the fitted curve's initial stiffness B C D gives at that force. A
 /// dead zone keeps the wheel rolling free there (about 0); a steep foot of the curve moves it
 /// (a fair share of 1). NaN: fewer than kMinPoints such points.
 double dead_zone_slip_ratio(const std::vector<Run>& runs, double p0_bar, double stiffness_n) {
   constexpr double kLo = 0.25, kHi = 0.75;
-  constexpr std::size_t kMinPoints = 10;
+  constexpr std::size_t kMinPoints = 10, kMinRestPoints = 3;
+  // Each run's rest: the median of its slips before the line reaches kLo of the threshold. A run
+  // that starts above that (or holds fewer points) takes the other runs' median: they are
+  // levelled to one foot, and its first sample alone can sit a quantisation step off (a wheel
+  // read in steps at roller speed is rebuilt between its transitions: 0.002 of slip).
+  std::vector<double> rests(runs.size(), NAN), known;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const Run& r = runs[k];
+    const double thr_n = r.brake_gain_n_per_bar * p0_bar;
+    std::vector<double> before;
+    for (std::size_t i = 0; i < r.slip.size() && line_force_n(r, i) < kLo * thr_n; ++i)
+      before.push_back(r.slip[i]);
+    if (before.size() >= kMinRestPoints) known.push_back(rests[k] = upper_median(before));
+  }
+  const double shared_rest = known.empty() ? NAN : upper_median(known);
   double excess = 0, expected = 0;
   std::size_t points = 0;
-  for (const Run& r : runs) {
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const Run& r = runs[k];
     const double thr_n = r.brake_gain_n_per_bar * p0_bar;
     if (r.slip.empty() || !(thr_n > 0)) continue;
-    const double rest = r.slip.front();
-    for (std::size_t i = 0; i < r.slip.size() && r.force_n[i] <= thr_n; ++i) {
-      if (r.force_n[i] < kLo * thr_n || r.force_n[i] > kHi * thr_n) continue;
+    const double rest = std::isfinite(rests[k])      ? rests[k]
+                        : std::isfinite(shared_rest) ? shared_rest
+                                                     : r.slip.front();
+    for (std::size_t i = 0; i < r.slip.size(); ++i) {
+      const double line_n = line_force_n(r, i);
+      if (line_n > thr_n) break;
+      if (line_n < kLo * thr_n || line_n > kHi * thr_n) continue;
       excess += r.slip[i] - rest;
-      expected += r.force_n[i] / stiffness_n;
+      expected += line_n / stiffness_n;
       ++points;
     }
   }
