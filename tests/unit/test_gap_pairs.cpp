@@ -214,3 +214,26 @@ TEST(GapPairs, ThePairNamedIsTheBestHeldOutThatPassesNotTheBestHeldOut) {
     return n.find("fitted together") != std::string::npos;
   })) << why;
 }
+
+TEST(GapPairs, AThresholdsDeadZoneIsReadOnTheLinesPressureBehindADeclaredFilter) {
+  // The referee's roller pair 36 (generator B, seed 1): a 0.39 m relaxation with a 2.8 bar
+  // threshold, ramps up to 60 bar/s through a declared 12 ms pressure filter. Read on the channel,
+  // the wheel moved a full curve's slip while the channel rose to about 60 % of p0 (the line was
+  // past it), and a run that starts above a quarter of p0 was measured from its first sample, a
+  // quantisation step below its rest: the threshold was refused (the slip moved 101 % as much as
+  // the curve gives) and the set said `relaxation_length, slip_offset, unexplained`.
+  const auto c = gap::Condition::Roller;
+  Rng rng(1 + 300 * static_cast<std::uint64_t>(c) + 7);
+  sim::Injection inj;
+  for (int t = 0; t <= 36; ++t) inj = sim::draw_pair(rng, c, sim::Generator::B);
+  ASSERT_EQ(inj.effect, "relaxation_length");
+  ASSERT_EQ(inj.effect2, "brake_threshold");
+  const auto res =
+      sim::run_trial(inj, 1000 + 700'000 + 36 + 100'000 * static_cast<std::uint64_t>(c),
+                     gap::calibrated_options(c));
+  std::string why;
+  for (const auto& s : res.scores) why += "\n  " + s;
+  for (const auto& s : res.notes) why += "\n  " + s;
+  EXPECT_TRUE(res.correct()) << ::testing::PrintToString(res.verdict) << why;
+  EXPECT_NEAR(res.estimate2, inj.magnitude2, 0.15 * inj.magnitude2) << why;
+}
