@@ -15,6 +15,29 @@
 
 using namespace brakefit;
 
+namespace {
+
+/// The referee's pair trial `index` as `bench/gap_referee --pairs` draws and seeds it (seed 1),
+/// diagnosed under the condition's shipped gates.
+struct RefereePair {
+  sim::Injection inj;
+  sim::TrialResult res;
+  std::string why;  ///< its scores and notes, for a failure's message
+};
+RefereePair referee_pair(gap::Condition c, sim::Generator g, int index) {
+  const auto cn = static_cast<std::uint64_t>(c);
+  Rng rng(1 + 300 * cn + 7);
+  RefereePair p;
+  for (int t = 0; t <= index; ++t) p.inj = sim::draw_pair(rng, c, g);
+  p.res = sim::run_trial(p.inj, 1000 + 700'000 + static_cast<std::uint64_t>(index) + 100'000 * cn,
+                         gap::calibrated_options(c));
+  for (const auto& s : p.res.scores) p.why += "\n  " + s;
+  for (const auto& s : p.res.notes) p.why += "\n  " + s;
+  return p;
+}
+
+}  // namespace
+
 TEST(GapPairs, DrawsTwoDifferentEffectsAndNeverLagWithDelay) {
   for (auto [c, g] : {std::pair{gap::Condition::Roller, sim::Generator::A},
                       std::pair{gap::Condition::Ground, sim::Generator::A},
@@ -169,17 +192,9 @@ TEST(GapPairs, AnEffectIsNotTakenWhereItPushesAnEffectNamedBeforeItToItsRangesEn
   // offset in round 2 its load ran to the end of its range. That joint fit was taken, and the set
   // was said `load_transfer, brake_threshold, relaxation_length, unexplained`: each added name
   // traded the first one's law for its own.
-  const auto c = gap::Condition::Ground;
-  Rng rng(1 + 300 * static_cast<std::uint64_t>(c) + 7);
-  sim::Injection inj;
-  for (int t = 0; t <= 33; ++t) inj = sim::draw_pair(rng, c, sim::Generator::A);
+  const auto [inj, res, why] = referee_pair(gap::Condition::Ground, sim::Generator::A, 33);
   ASSERT_EQ(inj.effect, "slip_offset");
   ASSERT_EQ(inj.effect2, "time_offset");
-  const auto res =
-      sim::run_trial(inj, 1000 + 700'000 + 33 + 100'000 * static_cast<std::uint64_t>(c),
-                     gap::calibrated_options(c));
-  std::string why;
-  for (const auto& s : res.scores) why += "\n  " + s;
   for (const char* e : {"brake_threshold", "relaxation_length", "load_transfer"})
     EXPECT_EQ(std::count(res.verdict.begin(), res.verdict.end(), e), 0) << e << why;
   // Alone the time offset fits short (0.0098 s: the offset's shift takes part of the delay) and
@@ -198,17 +213,9 @@ TEST(GapPairs, ThePairNamedIsTheBestHeldOutThatPassesNotTheBestHeldOut) {
   // brake threshold leaves the least held out but fails the gates; a lag with the slip offset,
   // next held out, passes. Taking only the best held out and checking it, the set stayed
   // `unexplained` with the offset unnamed (this test fails so).
-  const auto c = gap::Condition::Roller;
-  Rng rng(1 + 300 * static_cast<std::uint64_t>(c) + 7);
-  sim::Injection inj;
-  for (int t = 0; t <= 5; ++t) inj = sim::draw_pair(rng, c, sim::Generator::B);
+  const auto [inj, res, why] = referee_pair(gap::Condition::Roller, sim::Generator::B, 5);
   ASSERT_EQ(inj.effect, "slip_offset");
   ASSERT_EQ(inj.effect2, "relaxation_length");
-  const auto res = sim::run_trial(inj, 1000 + 700'000 + 5 + 100'000 * static_cast<std::uint64_t>(c),
-                                  gap::calibrated_options(c));
-  std::string why;
-  for (const auto& s : res.scores) why += "\n  " + s;
-  for (const auto& s : res.notes) why += "\n  " + s;
   EXPECT_TRUE(res.correct()) << ::testing::PrintToString(res.verdict) << why;
   EXPECT_TRUE(std::any_of(res.notes.begin(), res.notes.end(), [](const std::string& n) {
     return n.find("fitted together") != std::string::npos;
@@ -222,18 +229,9 @@ TEST(GapPairs, AThresholdsDeadZoneIsReadOnTheLinesPressureBehindADeclaredFilter)
   // past it), and a run that starts above a quarter of p0 was measured from its first sample, a
   // quantisation step below its rest: the threshold was refused (the slip moved 101 % as much as
   // the curve gives) and the set said `relaxation_length, slip_offset, unexplained`.
-  const auto c = gap::Condition::Roller;
-  Rng rng(1 + 300 * static_cast<std::uint64_t>(c) + 7);
-  sim::Injection inj;
-  for (int t = 0; t <= 36; ++t) inj = sim::draw_pair(rng, c, sim::Generator::B);
+  const auto [inj, res, why] = referee_pair(gap::Condition::Roller, sim::Generator::B, 36);
   ASSERT_EQ(inj.effect, "relaxation_length");
   ASSERT_EQ(inj.effect2, "brake_threshold");
-  const auto res =
-      sim::run_trial(inj, 1000 + 700'000 + 36 + 100'000 * static_cast<std::uint64_t>(c),
-                     gap::calibrated_options(c));
-  std::string why;
-  for (const auto& s : res.scores) why += "\n  " + s;
-  for (const auto& s : res.notes) why += "\n  " + s;
   EXPECT_TRUE(res.correct()) << ::testing::PrintToString(res.verdict) << why;
   EXPECT_NEAR(res.estimate2, inj.magnitude2, 0.15 * inj.magnitude2) << why;
 }
