@@ -212,8 +212,6 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
   std::size_t past_end = 0;
   const double threshold_n = r.brake_gain_n_per_bar * p0_bar;
   const double r2 = r.wheel_radius_m * r.wheel_radius_m;
-  const double filter_gain_n_s =
-      r.pressure_rate_bar_per_s.size() == n ? r.pressure_filter_s * r.brake_gain_n_per_bar : 0.0;
   // The wheel's load relative to its static one, as predict() has it.
   std::vector<double> load(n, 1.0);
   if (load_q != 0) {
@@ -235,7 +233,7 @@ TyrePoints tyre_points(const Run& r, const BenchModel& m) {
     // A declared pressure filter (the exporting software's first order) undone: the line's
     // pressure leads the channel by tau times its rate, and a fast ground ramp is tens of bar/s
     // per 10 ms.
-    const double line_n = r.force_n[i] + filter_gain_n_s * r.pressure_rate_bar_per_s[i];
+    const double line_n = line_force_n(r, i);
     out.curve.slip_ratio.push_back(s * std::pow(load[i], load_ratio - 1.0));
     // Below the threshold the pads give no torque: the channel reads up to p0 while the tyre
     // carries only the wheel's inertial force (predict's min(threshold, force), undone).

@@ -15,15 +15,6 @@ namespace brakefit::gap {
 
 namespace {
 
-/// The line's force at a run's point: the channel with a declared pressure filter (5-20 ms)
-/// undone. On a fast ramp the channel reads a bar low, and the wheel moves where the line, not
-/// the channel, has passed p0.
-double line_force_n(const Run& r, std::size_t i) {
-  const bool rate = r.pressure_rate_bar_per_s.size() == r.force_n.size();
-  return r.force_n[i] +
-         (rate ? r.pressure_filter_s * r.brake_gain_n_per_bar * r.pressure_rate_bar_per_s[i] : 0.0);
-}
-
 /// The dead zone's evidence: the slip, above its value at rest, at the points of each run's rise
 /// from rest whose line force lies between kLo and kHi of the threshold (before it first passed
 /// the threshold), against what the fitted curve's initial stiffness B C D gives at that force. A

@@ -68,6 +68,14 @@ double interp(const std::vector<double>& t, const std::vector<double>& x, double
 inline MfParams curve_of(const std::vector<double>& params) {
   return MfParams{params[0], params[1], params[2], params[3], 0, 0};
 }
+/// The line's force at a run's point: the channel with a declared pressure filter (5-20 ms)
+/// undone (the line leads the channel by tau times its rate). On a fast ramp the channel reads a
+/// bar low: the wheel moves where the line, not the channel, has passed a threshold.
+inline double line_force_n(const Run& r, std::size_t i) {
+  const bool rate = r.pressure_rate_bar_per_s.size() == r.force_n.size();
+  return r.force_n[i] +
+         (rate ? r.pressure_filter_s * r.brake_gain_n_per_bar * r.pressure_rate_bar_per_s[i] : 0.0);
+}
 /// The middle of v (of an even count, the upper of the two middles), by partial sorting in place:
 /// the robust centre the conditioning's noise, step and speed estimates share. Not empty.
 inline double upper_median(std::vector<double>& v) {
