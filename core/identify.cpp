@@ -101,18 +101,29 @@ SomEstimate identify_som(const Model& m, const Curve& c) {
 }
 
 std::vector<std::string> mlp_outside_training(const Model& m, const Curve& c) {
-  const double shortest =
-      m.config.mlp_truncate_fraction > 0 ? m.config.mlp_truncate_min_ratio : m.grid.back();
-  // Training masks the grid past its cut, so the shortest curve it saw ends on the last grid
-  // point at or below the shortest cut.
-  const auto past = std::upper_bound(m.grid.begin(), m.grid.end(), shortest + 1e-12);
-  const double seen = past == m.grid.begin() ? shortest : *std::prev(past);
+  // Training masks the grid past its cut, so a curve cut at r ends on the last grid point at or
+  // below r: the ends it saw are those of the cut range, and the grid's end (the curves it left
+  // whole). A curve ending between the longest cut and the grid's end is as new to the network
+  // as a shorter one (a model cut at 4-60 % returned E 2 for a car's curve to 87 % slip).
+  auto on_grid = [&](double r) {
+    const auto past = std::upper_bound(m.grid.begin(), m.grid.end(), r + 1e-12);
+    return past == m.grid.begin() ? r : *std::prev(past);
+  };
+  const bool cut = m.config.mlp_truncate_fraction > 0;
+  const double shortest = cut ? m.config.mlp_truncate_min_ratio : m.grid.back();
+  const double longest = cut ? on_grid(m.config.mlp_truncate_max_ratio) : m.grid.back();
   const double ends = resample_to_grid(c, m.grid).last_valid_slip(m.grid);
-  if (ends >= seen - 1e-12) return {};
-  return {
-      fmt::format("MLP extrapolating: the curve ends at {:.1f} % slip, the network was trained "
-                  "on curves reaching at least {:.1f} %",
-                  100.0 * ends, 100.0 * shortest)};
+  if (ends < on_grid(shortest) - 1e-12)
+    return {fmt::format(
+        "MLP extrapolating: the curve ends at {:.1f} % slip, the network was trained on curves "
+        "reaching at least {:.1f} %",
+        100.0 * ends, 100.0 * shortest)};
+  if (ends > longest + 1e-12 && ends < m.grid.back() - 1e-12)
+    return {fmt::format(
+        "MLP extrapolating: the curve ends at {:.1f} % slip, the network was trained on curves "
+        "cut at {:.1f} % or shorter, or reaching {:.1f} %",
+        100.0 * ends, 100.0 * m.config.mlp_truncate_max_ratio, 100.0 * m.grid.back())};
+  return {};
 }
 
 std::vector<std::string> mlp_estimate_outside_training(const Model& m, const MfParams& p) {

@@ -238,6 +238,18 @@ TEST(Identify, TheMlpFlagsACurveShorterThanAnyItWasTrainedOn) {
   flagged.params.C = 0.3;
   flag_implausible(flagged, 3800.0);
   EXPECT_GE(flagged.implausible.size(), 2u);
+  // A model whose cuts stop at 60 %: a ground run measured to 87 % ends where no training curve
+  // did (a car's curve there came out E 2 from such a model); at the cut or the grid's end it is
+  // one it saw.
+  m.config.mlp_truncate_max_ratio = 0.6;
+  const auto long_ = mlp_outside_training(m, sample_curve(p, even_slips(100, 0.87)));
+  ASSERT_EQ(long_.size(), 1u);
+  EXPECT_NE(long_[0].find("the curve ends at 85.0 % slip"), std::string::npos) << long_[0];
+  EXPECT_NE(long_[0].find("cut at 60.0 % or shorter, or reaching 100.0 %"), std::string::npos)
+      << long_[0];
+  EXPECT_TRUE(mlp_outside_training(m, sample_curve(p, even_slips(100, 0.6))).empty());
+  m.config.mlp_truncate_max_ratio = 1.0;
+  EXPECT_TRUE(mlp_outside_training(m, sample_curve(p, even_slips(100, 0.87))).empty());
   // A model trained on whole curves only: anything short of the grid's end is an extrapolation.
   m.config.mlp_truncate_fraction = 0.0;
   EXPECT_FALSE(mlp_outside_training(m, sample_curve(p, even_slips(100, 0.27))).empty());
