@@ -24,7 +24,7 @@ struct TrainConfig {
   double mlp_truncate_fraction = 0.7;    ///< share of MLP training curves cut short (roller tests)
   double mlp_truncate_min_ratio = 0.04;  ///< cut slip range for those curves: to the grid's end,
   double mlp_truncate_max_ratio = 1.0;   ///< or a curve ending past the longest cut is new to it
-  std::size_t mlp_ensemble = 5;  ///< networks in the MLP, seeds mlp.seed, mlp.seed + 1, ...
+  std::size_t mlp_ensemble = 5;          ///< networks in the MLP, seeds mlp.seed, mlp.seed + 1, ...
 };
 
 /// Throws InputError "SOURCE: key 'a.b': ..." or "SOURCE:LINE:COL: ..." for TOML syntax errors.
