@@ -257,7 +257,7 @@ TEST(Identify, TheMlpFlagsACurveShorterThanAnyItWasTrainedOn) {
 }
 
 TEST(Identify, AnMlpEstimatePastItsTrainingRangesIsFlagged) {
-  const Model m = tiny_model();
+  const Model& m = tiny_model();
   // The default families: B 4-22, C 1.35-1.65, E -6 to 0.6 (car and truck).
   EXPECT_TRUE(mlp_estimate_outside_training(m, {15, 1.6, 5000, 0.3, 0, 0}).empty());
   // Within a tenth of a range's width past its end: an estimate rounding at the edge.
@@ -312,7 +312,7 @@ TEST(TrainConfig, NonUtf8AndControlCharactersAreRefusedBeforeTheTomlParser) {
            {"[som]\nrows = 5\xff\n", "t.toml:2:9: invalid UTF-8"},
            {"[som]\nrows = \"\xed\xa0\x80\"\n", "t.toml:2:9: invalid UTF-8"},
            {"[som]\x01\n", "t.toml:1:6: control character"},
-           {std::string("[som]\n\0", 8), "t.toml:2:1: control character"}}) {
+           {std::string("[som]\n") + '\0', "t.toml:2:1: control character"}}) {
     try {
       parse_train_config(text, "t.toml");
       ADD_FAILURE() << text;
