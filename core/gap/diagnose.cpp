@@ -192,10 +192,14 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   rep.gap_before_rmse_n = heldout(runs, rep.baseline_effects, fit);
   rep.where = where_rows(runs, rep.before.params, rep.baseline_effects);
 
-  // A cradle cap exists on a roller only.
+  // A cradle cap exists on a roller only, load transfer on the road only: a vehicle held on the
+  // rollers does not pitch, and a roller's deceleration is its drive drooping under the brake's
+  // force: a load transfer fitted to it reshapes the curve with the force, which any curve that
+  // is not quite a Magic Formula lets it do, on null data too.
+  const bool roller = runs.front().bench == can::BenchKind::Roller;
   std::vector<Effect> candidates;
   for (Effect e : kAllEffects)
-    if ((e != Effect::CradleCap || runs.front().bench == can::BenchKind::Roller) &&
+    if ((e != Effect::CradleCap || roller) && (e != Effect::LoadTransfer || !roller) &&
         !(declared_load && e == Effect::LoadTransfer))
       candidates.push_back(e);
   select_effects(rep, runs, candidates, fit, o,

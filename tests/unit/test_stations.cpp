@@ -156,6 +156,32 @@ TEST(Stations, ANullSetOnADroopingRollerSaysNone) {
   EXPECT_EQ(rep.verdict, std::vector<std::string>{"none"});
 }
 
+TEST(Stations, ARollersDroopIsNotReadAsLoadTransfer) {
+  // Seed 1000013 of the every-station draw: a truck wheel on a 2.6 km/h roller whose drive slows
+  // under the brake. The roller's deceleration follows the force; a load transfer read from it
+  // reshaped the curve with the force (held-out gain 0.14 on this null set, which set the gates
+  // every weak effect on such rollers was held to). The vehicle stands on the rollers: no load
+  // transfer is a candidate there, and the null set's best candidate stays under the shipped gate.
+  const auto set =
+      sim2::draw_set(can::BenchKind::Roller, "none", 0, 1000013, sim2::Stations::Every);
+  ASSERT_GT(set.runs.front().roller_droop_ratio, 0.005);
+  const auto q = conditioned(set, false);
+  double decel_max = 0;
+  for (const auto& r : q)
+    for (double a : r.ref_decel_mps2) decel_max = std::max(decel_max, a);
+  ASSERT_GT(decel_max, 0.0) << "the roller's drive droops: its deceleration is there to read";
+  auto probe = gap::calibrated_options(gap::Condition::Roller);
+  probe.gate_gain = 1e9;  // name nothing: every candidate's score is wanted
+  const auto rep = gap::diagnose(q, sim::pooled_start(q), probe);
+  ASSERT_FALSE(rep.effects.empty());
+  double best = -1;
+  for (const auto& e : rep.effects) {
+    EXPECT_NE(e.effect, gap::Effect::LoadTransfer);
+    best = std::max(best, e.gain);
+  }
+  EXPECT_LT(best, gap::calibrated_options(gap::Condition::Roller).gate_gain);
+}
+
 TEST(Stations, AHeldRollerIsNotReadAsDrooping) {
   // Generator B's car sets hold their roller at speed: no droop is fitted (a droop fitted to
   // dithered levels would bend the slip).
