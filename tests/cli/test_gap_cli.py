@@ -93,8 +93,10 @@ class Gap(unittest.TestCase):
             self.assertEqual(len(doc["runs"]), 3)
             names = {e["name"] for e in doc["effects"]}
             for required in ("relaxation_length", "time_offset", "wheel_inertia", "brake_threshold",
-                             "slip_offset", "load_transfer", "speed_friction"):
+                             "slip_offset", "speed_friction", "cradle_cap"):
                 self.assertIn(required, names)
+            # A vehicle held on the rollers does not pitch: no load transfer is a roller candidate.
+            self.assertNotIn("load_transfer", names)
             for e in doc["effects"]:
                 self.assertAlmostEqual(e["gain"], 1 - e["heldout_rmse_after_n"] / e["heldout_rmse_before_n"], 9)
             # The recordings were simulated with a 0.2 m relaxation length: it is accepted first,
@@ -110,6 +112,7 @@ class Gap(unittest.TestCase):
             self.assertEqual(doc["condition"], "roller")
             self.assertGreaterEqual(doc["gates"]["gain"], 0.1)
             self.assertEqual(doc["gates"]["fit_quality_factor"], 1.5)  # the default
+            self.assertEqual(doc["gates"]["null_gap_over_floor"], 1.0)  # the floor alone
             # An effect is named only above the floor: the gap before it was more than the noise.
             self.assertEqual(doc["gates"]["min_gap_over_floor"], 0.9)
             self.assertGreater(doc["gap_before_rmse_n"], doc["noise_n"])
