@@ -53,7 +53,6 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
   j["gates"] = {{"gain", num(gates.gate_gain)},
                 {"bic_margin", num(gates.bic_margin)},
                 {"fit_quality_factor", num(gates.noise_factor)},
-                {"null_gap_over_floor", num(gates.null_gap_over_floor)},
                 {"min_gap_over_floor", num(gates.min_gap_over_floor)}};
   j["runs"] = nlohmann::ordered_json::array();
   for (const auto& run : runs) j["runs"].push_back(run.name);
@@ -283,7 +282,6 @@ void add_gap_command(CLI::App& app) {
     RunOptions run;
     double gate_gain = NAN, bic_margin = NAN;     ///< NaN: the calibrated gate of the condition
     double fit_quality_factor = NAN;              ///< NaN: the condition's (1.5)
-    double null_gap_over_floor = NAN;             ///< NaN: 1 (the floor alone)
     double vehicle_mass_kg = 0.0;                 ///< 0: not given
     double cg_height_m = 0.0, wheelbase_m = 0.0;  ///< 0: not given
     std::string axle = "front";
@@ -316,11 +314,6 @@ void add_gap_command(CLI::App& app) {
                   "a held-out gap above this x the noise floor is `unexplained` (default 1.5; "
                   "bench/gap_referee calibrates it on null data, as the gates)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--null-gap-over-floor", o->null_gap_over_floor,
-                  "the largest held-out gap / floor null sets of this bench's exports showed: "
-                  "structure the fit-quality check counts with the noise (default 1; "
-                  "bench/gap_referee prints it with the gates)")
-      ->check(CLI::Range(1.0, 100.0));
   cmd->add_option("--vehicle-mass", o->vehicle_mass_kg,
                   "the vehicle's mass in kg: load transfer is also given as the centre of "
                   "gravity's height over the wheelbase (h/L), from the runs' wheel load")
@@ -445,13 +438,11 @@ void add_gap_command(CLI::App& app) {
     }
     if (std::isfinite(o->bic_margin)) gap_options.bic_margin = o->bic_margin;
     if (std::isfinite(o->fit_quality_factor)) gap_options.noise_factor = o->fit_quality_factor;
-    if (std::isfinite(o->null_gap_over_floor))
-      gap_options.null_gap_over_floor = o->null_gap_over_floor;
     spdlog::info(
         "gap: condition {}, gates: held-out gain >= {:.3f}, BIC drop >= {:.1f}, "
-        "fit-quality factor {:.2f}, null gap / floor {:.2f}",
+        "fit-quality factor {:.2f}",
         gap::to_string(condition), gap_options.gate_gain, gap_options.bic_margin,
-        gap_options.noise_factor, gap_options.null_gap_over_floor);
+        gap_options.noise_factor);
     const gap::Report rep =
         transfer ? gap::diagnose_transfer(roller_runs, runs, seed.params, gap_options)
                  : gap::diagnose(runs, seed.params, gap_options);

@@ -325,14 +325,10 @@ void set_gates(GateCalibration& g) {
   // export the conditioning cannot fully undo (speeds quantised in mm/s steps under a ripple)
   // leaves a null gap of up to 1.6-2.2x the noise floor on generator B: with the fixed 1.5x its
   // null sets and weak effects said `unexplained`. The floor itself stays the noise's.
-  if (!g.null_gap_over_floor.empty()) {
-    const double largest =
-        *std::max_element(g.null_gap_over_floor.begin(), g.null_gap_over_floor.end());
-    g.options.noise_factor = std::max(g.options.noise_factor, kNullGapMargin * largest);
-    // The same structure is no sign of a curve that is not a Magic Formula: the fit-quality
-    // check's share of the structure left is taken beyond it.
-    g.options.null_gap_over_floor = std::max(1.0, largest);
-  }
+  if (!g.null_gap_over_floor.empty())
+    g.options.noise_factor = std::max(
+        g.options.noise_factor, kNullGapMargin * *std::max_element(g.null_gap_over_floor.begin(),
+                                                                   g.null_gap_over_floor.end()));
 }
 
 }  // namespace brakefit::sim

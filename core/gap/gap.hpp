@@ -238,11 +238,6 @@ struct Options {
   /// that the baseline left.
   double structure_floor_share = 0.8;
   double max_structure_left_share = 0.5;
-  /// The largest held-out gap over the floor that null sets of the same exports showed (at least
-  /// 1): structure the conditioning leaves where there is no effect (speeds quantised under a
-  /// ripple), counted with the noise when the share of the structure left is taken. The referee
-  /// sets it with the gates it calibrates; 1: the floor alone.
-  double null_gap_over_floor = 1.0;
   /// Load transfer under min_first_gain is still named where its round-1 gain is at least this x
   /// every other candidate's (one bite, not several nibbling alike: generator C's Burckhardt
   /// curves gave their best candidates 1.04-1.25x the runner-up's gain).

@@ -56,15 +56,10 @@ double structure_left_share(double before_n, double after_n, double noise_n) {
   return std::sqrt(std::max(0.0, after_n * after_n - noise_n * noise_n) / before);
 }
 
-double null_level_n(double noise_n, const Options& o) {
-  return noise_n * std::max(1.0, o.null_gap_over_floor);
-}
-
 bool structured_gap_left(double before_n, double after_n, double noise_n, const Options& o) {
   return after_n > o.noise_factor * noise_n ||
          (after_n > o.structure_floor_share * o.noise_factor * noise_n &&
-          structure_left_share(before_n, after_n, null_level_n(noise_n, o)) >
-              o.max_structure_left_share);
+          structure_left_share(before_n, after_n, noise_n) > o.max_structure_left_share);
 }
 
 FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n, double after_n,

@@ -320,10 +320,8 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
 double structure_left_share(double before_n, double after_n, double noise_n);
 /// The fit-quality check's "a structured gap is left": after_n above noise_factor x the noise,
 /// or above structure_floor_share x that while keeping more than max_structure_left_share of the
-/// structure beyond what null data leave (null_level_n) that the baseline (before_n) left.
+/// structure the baseline (before_n) left.
 bool structured_gap_left(double before_n, double after_n, double noise_n, const Options& o);
-/// What null data leave held out: the floor times Options::null_gap_over_floor (at least 1).
-double null_level_n(double noise_n, const Options& o);
 
 /// The fit-quality check on the first named effect (first_gain: its held-out gain, or the share
 /// the named effects explain together) against the largest round-1 gain of any other candidate.

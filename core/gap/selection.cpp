@@ -405,9 +405,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
              "residual has a structure no candidate explains (is the curve a Magic Formula?), so "
              "no effect is named",
              to_string(names.front()), 100 * first, judged_after_n, law_in_part ? " in-sample" : "",
-             rep.noise_n,
-             100 * structure_left_share(judged_before_n, judged_after_n,
-                                        null_level_n(rep.noise_n, o))),
+             rep.noise_n, 100 * structure_left_share(judged_before_n, judged_after_n, rep.noise_n)),
          "passed, but vetoed by the fit-quality check (see the notes)");
   // Nothing to explain: the baseline's held-out gap is within the noise floor (below
   // min_gap_over_floor x the floor, the floor's own uncertainty allowed for). A candidate may

@@ -112,7 +112,6 @@ class Gap(unittest.TestCase):
             self.assertEqual(doc["condition"], "roller")
             self.assertGreaterEqual(doc["gates"]["gain"], 0.1)
             self.assertEqual(doc["gates"]["fit_quality_factor"], 1.5)  # the default
-            self.assertEqual(doc["gates"]["null_gap_over_floor"], 1.0)  # the floor alone
             # An effect is named only above the floor: the gap before it was more than the noise.
             self.assertEqual(doc["gates"]["min_gap_over_floor"], 0.9)
             self.assertGreater(doc["gap_before_rmse_n"], doc["noise_n"])

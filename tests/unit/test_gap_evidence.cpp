@@ -206,25 +206,6 @@ TEST(GapFitQuality, OneEffectStandingOutIsNamedWhereSeveralNibblingAlikeAreNot) 
   EXPECT_EQ(gap::fit_quality(0.15, 0.14, 1.3, 1.1, 1.0, false, o), gap::FitQuality::Explained);
 }
 
-TEST(GapFitQuality, TheStructureNullSetsLeaveCountsWithTheNoise) {
-  // Exports whose null sets leave up to 1.58 x the floor held out (speeds quantised under a
-  // ripple: the referee's fit-quality factor 1.74). A 1.8 kg m^2 wheel inertia fitted at its
-  // value takes 26 % of a 6.0 N gap on a 3.1 N floor and leaves 4.5 N: 62 % of the structure
-  // beyond the floor, but none beyond what the null sets leave.
-  gap::Options o;
-  o.noise_factor = 1.74;
-  o.gate_gain = 0.117;
-  EXPECT_EQ(gap::fit_quality(0.257, 0.118, 6.0, 4.5, 3.1, false, o), gap::FitQuality::Nibble);
-  o.null_gap_over_floor = 1.58;
-  EXPECT_NEAR(gap::null_level_n(3.1, o), 4.898, 1e-9);
-  EXPECT_EQ(gap::fit_quality(0.257, 0.118, 6.0, 4.5, 3.1, false, o), gap::FitQuality::Explained);
-  // A curve that is not a Magic Formula still leaves its structure beyond that level.
-  EXPECT_TRUE(gap::structured_gap_left(3.0 * 3.1, 2.3 * 3.1, 3.1, o));
-  // Under 1 the floor alone counts (null sets cannot make the floor smaller).
-  o.null_gap_over_floor = 0.7;
-  EXPECT_DOUBLE_EQ(gap::null_level_n(3.1, o), 3.1);
-}
-
 TEST(GapConditioning, ADroopingRollersLagIsReadBetweenTheTriedLags) {
   // A roller at 4 km/h whose drive loses 17 mm/s under 4.5 kN behind a 0.3 s lag, read in
   // 2.4 mm/s steps, under a 0.9 s pedal ramp. The lag lies between the tried 0.2 and 0.4 s: at
