@@ -364,6 +364,11 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
       base.brush_tyre.mu_static = peak_n / base.fz_n * rng.uniform(1.0, 1.1);
       base.brush_tyre.mu_kinetic = base.brush_tyre.mu_static * rng.uniform(0.6, 0.85);
       base.brush_tyre.v_c_mps = rng.uniform(0.3, 2.0);
+      // On the road the runs' speeds differ: a friction that falls with the sliding speed is
+      // speed friction there (in the catalogue), not a curve that is no Magic Formula. The road's
+      // brush tyre slides at one friction; on the roller, at one speed, the fall only shapes
+      // the curve.
+      if (bench != can::BenchKind::Roller) base.brush_tyre.mu_kinetic = base.brush_tyre.mu_static;
     }
     out.magnitudes.push_back(truth);
   }

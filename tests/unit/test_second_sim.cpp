@@ -89,6 +89,21 @@ TEST(SecondSim, BrushTyreIsStiffAtZeroAndSaturatesAtFriction) {
   EXPECT_NEAR(sim2::brush_braking_force_n(b, 0.5, 4000, 0.0), 4000, 1e-6);  // static at rest
 }
 
+TEST(SecondSim, TheMisspecifiedRoadTyreHasNoSpeedFriction) {
+  // On the road the runs' speeds differ: a brush friction falling with the sliding speed would be
+  // speed friction (a catalogue effect), not a curve that is no Magic Formula. At a roller's one
+  // speed the fall only shapes the curve, and stays.
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    const auto road = sim2::draw_set(can::BenchKind::Ground, "misspecified", 0.0, seed);
+    ASSERT_FALSE(road.runs.empty());
+    EXPECT_TRUE(road.runs.front().brush);
+    EXPECT_EQ(road.runs.front().brush_tyre.mu_kinetic, road.runs.front().brush_tyre.mu_static);
+    const auto roller = sim2::draw_set(can::BenchKind::Roller, "misspecified", 0.0, seed);
+    EXPECT_LT(roller.runs.front().brush_tyre.mu_kinetic,
+              0.9 * roller.runs.front().brush_tyre.mu_static);
+  }
+}
+
 TEST(SecondSim, ItsExportIsReadAsTheEventsItHolds) {
   for (auto bench : {can::BenchKind::Roller, can::BenchKind::Ground}) {
     const auto set = sim2::draw_set(bench, "none", 0.0, 3);
