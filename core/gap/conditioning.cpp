@@ -181,7 +181,11 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   // errors as force (5 N on B's null ground sets, 2x their floor), and the stamps smoothed kept
   // a scatter that read the deceleration 2 % off mid-run and twice over at the run's end (where
   // the smoother's window shrinks): load transfer seed 101171's stiffness ratio fitted to 0.
-  full.t_s = sampler_clock(full.t_s, half_window);
+  std::vector<double> event_stamps_s;
+  for (const auto* part : {&e.lead_in, &e.samples})
+    for (const pipeline::Sample& s : *part)
+      event_stamps_s.push_back(static_cast<double>(s.t_ns - e.t_start_ns) * 1e-9);
+  full.t_s = sampler_clock(full.t_s, half_window, sampler_interval(event_stamps_s, half_window));
   // A first-order filter the tester declared on its pressure channel stays in the data: the
   // model's force is filtered the same way (predict). (Undoing it, p + tau dp/dt, left 3-6 N of
   // structure on noise-free generator B ground runs: the slope is smeared at the ramp's kink.)

@@ -2,10 +2,19 @@
 // noise a channel keeps after it, derivatives and interpolation.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/gap/internal.hpp"
 
 namespace brakefit::gap {
+
+namespace {
+
+/// How many standard errors of the stamps' fitted interval a whole number of milliseconds may lie
+/// from it and be taken as the sampler's interval (sampler_interval).
+constexpr double kWholeMsSe = 3.0;
+
+}  // namespace
 namespace {
 
 /// The centre weights of the quadratic Savitzky-Golay filter of half window m, k = -m..m.
@@ -72,41 +81,87 @@ std::vector<double> smooth(const std::vector<double>& x, int hw) {
   return y;
 }
 
-std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_window) {
+namespace {
+
+/// The stamps' least-squares line over the sample index: its centre, slope and slope's standard
+/// error.
+struct StampLine {
+  double mean_k = 0, mean_t_s = 0, interval_s = 0, interval_se_s = 0;
+  double at(std::size_t k) const {
+    return mean_t_s + interval_s * (static_cast<double>(k) - mean_k);
+  }
+};
+
+StampLine stamp_line(const std::vector<double>& stamps_s) {
+  const std::size_t n = stamps_s.size();
+  StampLine l;
+  l.mean_k = 0.5 * static_cast<double>(n - 1);
+  for (double t : stamps_s) l.mean_t_s += t / static_cast<double>(n);
+  double skt = 0, skk = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double dk = static_cast<double>(k) - l.mean_k;
+    skt += dk * (stamps_s[k] - l.mean_t_s);
+    skk += dk * dk;
+  }
+  l.interval_s = skt / skk;
+  double res_sq = 0;
+  for (std::size_t k = 0; k < n; ++k) res_sq += (stamps_s[k] - l.at(k)) * (stamps_s[k] - l.at(k));
+  l.interval_se_s = std::sqrt(res_sq / static_cast<double>(n - 2) / skk);
+  return l;
+}
+
+/// Regular: the residual is the stamps' scatter, with no trend (a drifting or uneven sampler, a
+/// dropped sample's step of one interval): its mean over each block of six smoothers' half
+/// windows stays within a quarter interval (the scatter's own, 0.4 ms over 60 samples: 0.05 ms).
+bool regular(const std::vector<double>& stamps_s, const StampLine& l, int half_window) {
+  const std::size_t n = stamps_s.size();
+  const std::size_t block = std::max<std::size_t>(8, 6 * static_cast<std::size_t>(half_window));
+  for (std::size_t b0 = 0; b0 < n; b0 += block) {
+    const std::size_t b1 = n - b0 < 2 * block ? n : b0 + block;  // the remainder joins the last
+    double mean = 0;
+    for (std::size_t k = b0; k < b1; ++k)
+      mean += (stamps_s[k] - l.at(k)) / static_cast<double>(b1 - b0);
+    if (std::abs(mean) > 0.25 * l.interval_s) return false;
+    if (b1 == n) break;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::optional<double> sampler_interval(const std::vector<double>& stamps_s, int half_window) {
+  if (stamps_s.size() < 8) return std::nullopt;
+  const StampLine l = stamp_line(stamps_s);
+  if (!(l.interval_s > 0) || !regular(stamps_s, l, half_window)) return std::nullopt;
+  // A tester's sampler ticks on a millisecond timer: where one whole number of milliseconds lies
+  // within kWholeMsSe standard errors of the interval (and no other can), it is that number.
+  const double whole_s = std::round(l.interval_s * 1e3) / 1e3;
+  const double tol_s = kWholeMsSe * l.interval_se_s;
+  if (whole_s >= 1e-3 && tol_s < 0.5e-3 && std::abs(l.interval_s - whole_s) <= tol_s)
+    return whole_s;
+  return l.interval_s;
+}
+
+std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_window,
+                                  std::optional<double> interval_s) {
   const std::size_t n = stamps_s.size();
   auto smoothed = [&] {
     std::vector<double> t = smooth(stamps_s, half_window);
     for (std::size_t i = 1; i < n; ++i) t[i] = std::max(t[i], t[i - 1]);
     return t;
   };
-  if (n < 8) return smoothed();
-  // Least squares line of the stamps over the sample index.
-  const double mean_k = 0.5 * static_cast<double>(n - 1);
-  double mean_t = 0;
-  for (double t : stamps_s) mean_t += t / static_cast<double>(n);
-  double skt = 0, skk = 0;
-  for (std::size_t k = 0; k < n; ++k) {
-    const double dk = static_cast<double>(k) - mean_k;
-    skt += dk * (stamps_s[k] - mean_t);
-    skk += dk * dk;
+  if (n < 8 && !interval_s) return smoothed();
+  StampLine l;
+  if (n >= 8) {
+    l = stamp_line(stamps_s);
+  } else {
+    l.mean_k = 0.5 * static_cast<double>(n - 1);
+    for (double t : stamps_s) l.mean_t_s += t / static_cast<double>(n);
   }
-  const double interval_s = skt / skk;
-  if (!(interval_s > 0)) return smoothed();
+  if (interval_s) l.interval_s = *interval_s;  // the event's sampler, read on all its stamps
+  if (!(l.interval_s > 0) || !regular(stamps_s, l, half_window)) return smoothed();
   std::vector<double> line(n);
-  for (std::size_t k = 0; k < n; ++k)
-    line[k] = mean_t + interval_s * (static_cast<double>(k) - mean_k);
-  // Regular: the residual is the stamps' scatter, with no trend (a drifting or uneven sampler, a
-  // dropped sample's step of one interval): its mean over each block of six smoothers' half
-  // windows stays within a quarter interval (the scatter's own, 0.4 ms over 60 samples: 0.05 ms).
-  const std::size_t block = std::max<std::size_t>(8, 6 * static_cast<std::size_t>(half_window));
-  for (std::size_t b0 = 0; b0 < n; b0 += block) {
-    const std::size_t b1 = n - b0 < 2 * block ? n : b0 + block;  // the remainder joins the last
-    double mean = 0;
-    for (std::size_t k = b0; k < b1; ++k)
-      mean += (stamps_s[k] - line[k]) / static_cast<double>(b1 - b0);
-    if (std::abs(mean) > 0.25 * interval_s) return smoothed();
-    if (b1 == n) break;
-  }
+  for (std::size_t k = 0; k < n; ++k) line[k] = l.at(k);
   return line;
 }
 

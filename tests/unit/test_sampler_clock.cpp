@@ -176,3 +176,32 @@ TEST(SamplerClock, TheRunsTimeIsTheSamplersClock) {
   // Measured: 0.000 m/s^2 (with the stamps smoothed: 0.46).
   EXPECT_LT(end_worst, 0.2);
 }
+
+TEST(SamplerClock, AShortStopTakesTheIntervalItsWholeEventReads) {
+  // A 50 Hz sampler, its stamps jittered by 5 ms (a quarter interval) to 0.1 ms: 11 samples to
+  // the lock read the interval a few per cent off, the event's 60 (its lead-in at rest too) to
+  // within a standard error of 20 ms, which its timer ticks in.
+  std::vector<double> times;
+  for (int i = 0; i < 60; ++i) times.push_back(0.004 + i * 0.02);
+  int off_short = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const auto stamps = stamps_of(times, 5e-3, 1e-4, seed);
+    const auto interval = gap::sampler_interval(stamps, 10);
+    ASSERT_TRUE(interval.has_value());
+    EXPECT_DOUBLE_EQ(*interval, 0.02) << seed;
+    const std::vector<double> last(stamps.end() - 11, stamps.end());
+    const auto alone = gap::sampler_clock(last, 10);
+    off_short += std::abs((alone.back() - alone.front()) / 10 - 0.02) > 2e-4;
+    const auto clock = gap::sampler_clock(last, 10, interval);
+    EXPECT_NEAR((clock.back() - clock.front()) / 10, 0.02, 1e-12);
+  }
+  EXPECT_GT(off_short, 5);  // alone, 11 stamps are more than 1 % off in most of the 20 stops
+  // A sampler that does not tick in whole milliseconds (60 Hz) keeps its own interval; too few
+  // stamps give none.
+  std::vector<double> t60;
+  for (int i = 0; i < 60; ++i) t60.push_back(i / 60.0);
+  const auto i60 = gap::sampler_interval(stamps_of(t60, 2e-4, 1e-4, 3), 10);
+  ASSERT_TRUE(i60.has_value());
+  EXPECT_NEAR(*i60, 1 / 60.0, 2e-5);
+  EXPECT_FALSE(gap::sampler_interval({0.0, 0.02, 0.04}, 10).has_value());
+}
