@@ -59,14 +59,21 @@ std::vector<double> smooth(const std::vector<double>& x, int half_window);
 /// sample early or late (jitter, a 1 ms stamp resolution). Where the stamps scatter about one line
 /// of the sample index (no drift wider than a quarter interval), that line; otherwise (uneven
 /// sampling, a dropped sample) the stamps smoothed as the channels are, made monotone.
+/// A sampler's interval read on a run of stamps, and its standard error.
+struct SamplerInterval {
+  double interval_s = 0, se_s = 0;
+};
+/// The run's line takes the event's interval where that is the better read (a short stop's 11
+/// samples under 5 ms of jitter read a 50 Hz sampler 2.6 % slow, and the declared pressure filter
+/// over that clock read a fast stop's force late: a time offset of -0.8 ms took 40 % of a null
+/// set's gap), and a whole number of milliseconds within three standard errors of it (a tester's
+/// timer ticks in them).
 std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_window,
-                                  std::optional<double> interval_s = std::nullopt);
-/// The sampler's interval read on every stamp of an event (its lead-in at rest too: a short
-/// stop's 11 samples under 5 ms of jitter read a 50 Hz sampler 2.6 % slow, and the declared
-/// pressure filter run over that clock reads a fast stop's force late: a time offset of -0.8 ms
-/// took 40 % of a null set's gap). A whole number of milliseconds within three standard errors
-/// is taken (a tester's timer ticks in them). nullopt: too few stamps, or not one regular clock.
-std::optional<double> sampler_interval(const std::vector<double>& stamps_s, int half_window);
+                                  std::optional<SamplerInterval> event = std::nullopt);
+/// The interval read on every stamp of an event (its lead-in at rest too). nullopt: too few
+/// stamps, or not one regular clock.
+std::optional<SamplerInterval> sampler_interval(const std::vector<double>& stamps_s,
+                                                int half_window);
 /// Central differences (one-sided at the ends).
 std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x);
 /// Linear interpolation of x(t) at `at`, held at the ends.

@@ -11,7 +11,7 @@ namespace brakefit::gap {
 namespace {
 
 /// How many standard errors of the stamps' fitted interval a whole number of milliseconds may lie
-/// from it and be taken as the sampler's interval (sampler_interval).
+/// from it and be taken as the sampler's interval (sampler_clock).
 constexpr double kWholeMsSe = 3.0;
 
 }  // namespace
@@ -129,36 +129,42 @@ bool regular(const std::vector<double>& stamps_s, const StampLine& l, int half_w
 
 }  // namespace
 
-std::optional<double> sampler_interval(const std::vector<double>& stamps_s, int half_window) {
+std::optional<SamplerInterval> sampler_interval(const std::vector<double>& stamps_s,
+                                                int half_window) {
   if (stamps_s.size() < 8) return std::nullopt;
   const StampLine l = stamp_line(stamps_s);
   if (!(l.interval_s > 0) || !regular(stamps_s, l, half_window)) return std::nullopt;
-  // A tester's sampler ticks on a millisecond timer: where one whole number of milliseconds lies
-  // within kWholeMsSe standard errors of the interval (and no other can), it is that number.
-  const double whole_s = std::round(l.interval_s * 1e3) / 1e3;
-  const double tol_s = kWholeMsSe * l.interval_se_s;
-  if (whole_s >= 1e-3 && tol_s < 0.5e-3 && std::abs(l.interval_s - whole_s) <= tol_s)
-    return whole_s;
-  return l.interval_s;
+  return SamplerInterval{l.interval_s, l.interval_se_s};
 }
 
 std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_window,
-                                  std::optional<double> interval_s) {
+                                  std::optional<SamplerInterval> event) {
   const std::size_t n = stamps_s.size();
   auto smoothed = [&] {
     std::vector<double> t = smooth(stamps_s, half_window);
     for (std::size_t i = 1; i < n; ++i) t[i] = std::max(t[i], t[i - 1]);
     return t;
   };
-  if (n < 8 && !interval_s) return smoothed();
+  if (n < 8 && !event) return smoothed();
   StampLine l;
   if (n >= 8) {
     l = stamp_line(stamps_s);
   } else {
     l.mean_k = 0.5 * static_cast<double>(n - 1);
     for (double t : stamps_s) l.mean_t_s += t / static_cast<double>(n);
+    l.interval_se_s = INFINITY;
   }
-  if (interval_s) l.interval_s = *interval_s;  // the event's sampler, read on all its stamps
+  // The event's interval where it is the better read (more stamps; the run's own scatter).
+  if (event && (!(l.interval_s > 0) || event->se_s < l.interval_se_s)) {
+    l.interval_s = event->interval_s;
+    l.interval_se_s = event->se_s;
+  }
+  // A tester's sampler ticks on a millisecond timer: where one whole number of milliseconds lies
+  // within kWholeMsSe standard errors of the interval (and no other can), it is that number.
+  const double whole_s = std::round(l.interval_s * 1e3) / 1e3;
+  const double tol_s = kWholeMsSe * l.interval_se_s;
+  if (whole_s >= 1e-3 && tol_s < 0.5e-3 && std::abs(l.interval_s - whole_s) <= tol_s)
+    l.interval_s = whole_s;
   if (!(l.interval_s > 0) || !regular(stamps_s, l, half_window)) return smoothed();
   std::vector<double> line(n);
   for (std::size_t k = 0; k < n; ++k) line[k] = l.at(k);
