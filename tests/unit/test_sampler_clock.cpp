@@ -181,8 +181,8 @@ TEST(SamplerClock, AShortStopTakesTheIntervalItsWholeEventReads) {
   // A 50 Hz sampler, its stamps jittered by 5 ms (a quarter interval) to 0.1 ms: 11 samples to
   // the lock read the interval a few per cent off, the event's 60 (its lead-in at rest too) to
   // within a standard error of 20 ms, which its timer ticks in.
-  std::vector<double> times;
-  for (int i = 0; i < 60; ++i) times.push_back(0.004 + i * 0.02);
+  std::vector<double> times(60);
+  for (std::size_t i = 0; i < times.size(); ++i) times[i] = 0.004 + static_cast<double>(i) * 0.02;
   int off_short = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     const auto stamps = stamps_of(times, 5e-3, 1e-4, seed);
@@ -198,14 +198,14 @@ TEST(SamplerClock, AShortStopTakesTheIntervalItsWholeEventReads) {
   EXPECT_GT(off_short, 5);  // alone, 11 stamps are more than 1 % off in most of the 20 stops
   // A sampler that does not tick in whole milliseconds (60 Hz) keeps its own interval; too few
   // stamps give none. A run whose own stamps read the interval better keeps its own.
-  std::vector<double> t60;
-  for (int i = 0; i < 60; ++i) t60.push_back(i / 60.0);
+  std::vector<double> t60(60);
+  for (std::size_t i = 0; i < t60.size(); ++i) t60[i] = static_cast<double>(i) / 60.0;
   const auto s60 = stamps_of(t60, 2e-4, 1e-4, 3);
   const auto c60 = gap::sampler_clock(s60, 10, gap::sampler_interval(s60, 10));
   EXPECT_NEAR((c60.back() - c60.front()) / 59, 1 / 60.0, 2e-5);
   EXPECT_FALSE(gap::sampler_interval({0.0, 0.02, 0.04}, 10).has_value());
-  std::vector<double> exact;
-  for (int i = 0; i < 200; ++i) exact.push_back(i * 2.0002e-3);
+  std::vector<double> exact(200);
+  for (std::size_t i = 0; i < exact.size(); ++i) exact[i] = static_cast<double>(i) * 2.0002e-3;
   const auto kept = gap::sampler_clock(exact, 10, gap::SamplerInterval{2.1e-3, 1e-5});
   EXPECT_NEAR((kept.back() - kept.front()) / 199, 2.0002e-3, 1e-9);
 }
