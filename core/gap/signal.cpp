@@ -14,9 +14,6 @@ namespace {
 /// from it and be taken as the sampler's interval (sampler_clock).
 constexpr double kWholeMsSe = 3.0;
 
-}  // namespace
-namespace {
-
 /// The centre weights of the quadratic Savitzky-Golay filter of half window m, k = -m..m.
 std::vector<double> sg_weights(int half_window) {
   const double m = half_window;
@@ -84,7 +81,7 @@ std::vector<double> smooth(const std::vector<double>& x, int hw) {
 namespace {
 
 /// The stamps' least-squares line over the sample index: its centre, slope and slope's standard
-/// error.
+/// error (infinite under 8 stamps: too few to read it on).
 struct StampLine {
   double mean_k = 0, mean_t_s = 0, interval_s = 0, interval_se_s = 0;
   double at(std::size_t k) const {
@@ -106,7 +103,7 @@ StampLine stamp_line(const std::vector<double>& stamps_s) {
   l.interval_s = skt / skk;
   double res_sq = 0;
   for (std::size_t k = 0; k < n; ++k) res_sq += (stamps_s[k] - l.at(k)) * (stamps_s[k] - l.at(k));
-  l.interval_se_s = std::sqrt(res_sq / static_cast<double>(n - 2) / skk);
+  l.interval_se_s = n < 8 ? INFINITY : std::sqrt(res_sq / static_cast<double>(n - 2) / skk);
   return l;
 }
 
@@ -146,14 +143,7 @@ std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_
     return t;
   };
   if (n < 8 && !event) return smoothed();
-  StampLine l;
-  if (n >= 8) {
-    l = stamp_line(stamps_s);
-  } else {
-    l.mean_k = 0.5 * static_cast<double>(n - 1);
-    for (double t : stamps_s) l.mean_t_s += t / static_cast<double>(n);
-    l.interval_se_s = INFINITY;
-  }
+  StampLine l = stamp_line(stamps_s);
   // The event's interval where it is the better read (more stamps; the run's own scatter).
   if (event && (!(l.interval_s > 0) || event->se_s < l.interval_se_s)) {
     l.interval_s = event->interval_s;
