@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "core/curve.hpp"
 #include "core/gap/gap.hpp"
@@ -331,7 +332,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   const double slip_sd = measured_sd.value_or(0.0);
   const auto vr = smooth(full.v_ref_mps, half_window), vw = smooth(v_wheel, half_window);
   Run::NoiseProbe probe{half_window, std::move(raw_slip), {}, {}, slip_sd};
-  full.v_ref_mps = vr;
+  const std::vector<double> v_ref_raw = std::exchange(full.v_ref_mps, vr);
   for (std::size_t i = 0; i < vr.size(); ++i) {
     full.slip.push_back(std::clamp(1.0 - vw[i] / vr[i], -1.0, 1.0));  // below 0: a slip offset
     full.slip_sd.push_back(slip_sd);
@@ -353,6 +354,8 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     full.ref_angle_rad[i] =
         full.ref_angle_rad[i - 1] + 0.5 * (vr[i] + vr[i - 1]) * dt / ref_radius_m;
   }
+  full.encoder_wave = {smoothed_wave(v_wheel, vw, full.wheel_angle_rad, half_window),
+                       smoothed_wave(v_ref_raw, vr, full.ref_angle_rad, half_window)};
   if (measured_sd) {
     probe.wheel_angle_rad = full.wheel_angle_rad;
     probe.ref_angle_rad = full.ref_angle_rad;
@@ -416,6 +419,10 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     r.wheel_accel_mps2.push_back(full.wheel_accel_mps2[i]);
     r.wheel_angle_rad.push_back(full.wheel_angle_rad[i]);
     r.ref_angle_rad.push_back(full.ref_angle_rad[i]);
+    for (std::size_t k = 0; k < 2; ++k) {
+      r.encoder_wave[k].cos.push_back(full.encoder_wave[k].cos[i]);
+      r.encoder_wave[k].sin.push_back(full.encoder_wave[k].sin[i]);
+    }
     r.ref_decel_mps2.push_back(full.ref_decel_mps2[i]);
     r.pressure_rate_bar_per_s.push_back(full.pressure_rate_bar_per_s[i]);
   }

@@ -15,7 +15,8 @@ Run up_to(const Run& r, const std::vector<double>& x, double limit) {
   Run out = r;
   for (auto* v : {&out.t_s, &out.slip, &out.v_ref_mps, &out.force_n, &out.wheel_accel_mps2,
                   &out.ref_decel_mps2, &out.pressure_rate_bar_per_s, &out.slip_sd,
-                  &out.wheel_angle_rad, &out.ref_angle_rad})
+                  &out.wheel_angle_rad, &out.ref_angle_rad, &out.encoder_wave[0].cos,
+                  &out.encoder_wave[0].sin, &out.encoder_wave[1].cos, &out.encoder_wave[1].sin})
     if (v->size() > n) v->resize(n);
   return out;
 }

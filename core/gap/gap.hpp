@@ -87,6 +87,16 @@ struct Run {
   /// The encoders' rolled angles (rad) since the run's start: speed / radius integrated (the
   /// wheel's, and the roller's or fifth wheel's), for their once-per-revolution ripple.
   std::vector<double> wheel_angle_rad, ref_angle_rad;
+  /// An encoder's once-per-revolution wave as the speeds' smoother passed it into the slip:
+  /// smooth(v cos angle) / smooth(v), and the same with sin (empty: cos and sin of the angle).
+  /// Sampled slowly, a fast wheel's ripple is mostly smoothed away (at 50 Hz a wheel at 130
+  /// km/h turns 0.39 of a revolution between samples, and the five-point smoother passes 0.22
+  /// of its ripple, bent in phase); read as the unsmoothed wave it was neither fitted where it
+  /// was nor counted in the floor as what was left of it.
+  struct Wave {
+    std::vector<double> cos, sin;
+  };
+  std::array<Wave, 2> encoder_wave;    ///< the wheel's, the reference's
   std::vector<double> ref_decel_mps2;  ///< -d v_ref / dt
   std::vector<double> pressure_rate_bar_per_s;
   double noise_n = 0.0;  ///< measurement noise of the force, estimated before decimation

@@ -184,6 +184,19 @@ struct SpeedRipple {
 /// a ripple placed once) (ripple_removal.cpp).
 enum class ProbeAfter { AsMeasured, WithoutRipple };
 void take_out_ripple(Run& r, const SpeedRipple& ripple, ProbeAfter probe_after);
+/// An encoder's unit wave through the speeds' smoother (Run::Wave): smooth(v cos angle) /
+/// smooth(v) and the same with sin, for the raw speed v, its smoothed v_smooth and the angle
+/// rolled on it (ripple_removal.cpp).
+Run::Wave smoothed_wave(const std::vector<double>& v, const std::vector<double>& v_smooth,
+                        const std::vector<double>& angle_rad, int half_window);
+/// Run r's wave for encoder e (0 the wheel, 1 the reference): as its smoother passed it, or cos
+/// and sin of its angle where the run carries none.
+Run::Wave encoder_wave(const Run& r, std::size_t e);
+/// The RMS of a unit ripple of any phase in the wave at point i (1/sqrt 2 unsmoothed): what a
+/// ripple left in the slip adds to its noise there.
+inline double wave_rms(const Run::Wave& w, std::size_t i) {
+  return std::sqrt(0.5 * (w.cos[i] * w.cos[i] + w.sin[i] * w.sin[i]));
+}
 /// Takes a reference ripple v (1 + c cos + s sin of its angle) out of a run, its probe too: it
 /// is placed once, before the encoders' estimates start from the slip as it leaves here.
 void take_out_reference_ripple(Run& r, double c, double s);

@@ -92,12 +92,23 @@ SpeedFit fit_speed(const std::vector<double>& v, const std::vector<double>& angl
   return out;
 }
 
-/// The speed read as v (1 + c cos + s sin of the angle), with that ripple divided out.
-std::vector<double> without_ripple(const std::vector<double>& v, const std::vector<double>& angle,
-                                   double c, double s) {
+/// cos and sin of the angle: the wave of a speed read before the smoother.
+Run::Wave unsmoothed_wave(const std::vector<double>& angle) {
+  Run::Wave w;
+  for (const double a : angle) {
+    w.cos.push_back(std::cos(a));
+    w.sin.push_back(std::sin(a));
+  }
+  return w;
+}
+
+/// The speed read as v (1 + c cos + s sin of the angle, as the wave carries it), with that
+/// ripple divided out.
+std::vector<double> without_ripple(const std::vector<double>& v, const Run::Wave& wave, double c,
+                                   double s) {
   std::vector<double> out(v.size());
   for (std::size_t i = 0; i < v.size(); ++i)
-    out[i] = v[i] / (1.0 + c * std::cos(angle[i]) + s * std::sin(angle[i]));
+    out[i] = v[i] / (1.0 + c * wave.cos[i] + s * wave.sin[i]);
   return out;
 }
 
@@ -115,12 +126,13 @@ double median_of(std::vector<double> x) {
 /// run never placed a true one, and its slip noise then carried it), not just a sliver of a
 /// trend's misfit.
 std::optional<std::pair<double, double>> place_phase(const std::vector<double>& v,
-                                                     const std::vector<double>& angle, double amp) {
+                                                     const std::vector<double>& angle,
+                                                     const Run::Wave& wave, double amp) {
   const std::size_t n = v.size();
   const Eigen::MatrixXd a = trend_basis(angle);
   const auto qr = a.colPivHouseholderQr();
   auto ssr = [&](double c, double s) {
-    const std::vector<double> w = without_ripple(v, angle, c, s);
+    const std::vector<double> w = without_ripple(v, wave, c, s);
     const Eigen::Map<const Eigen::VectorXd> b(w.data(), static_cast<Eigen::Index>(n));
     return (b - a * qr.solve(b)).squaredNorm();
   };
@@ -137,8 +149,7 @@ std::optional<std::pair<double, double>> place_phase(const std::vector<double>& 
   if (best_c == 0 && best_s == 0) return std::nullopt;  // no phase explains anything
   Eigen::VectorXd ripple(static_cast<Eigen::Index>(n));
   for (std::size_t i = 0; i < n; ++i)
-    ripple(static_cast<Eigen::Index>(i)) =
-        v[i] * (best_c * std::cos(angle[i]) + best_s * std::sin(angle[i]));
+    ripple(static_cast<Eigen::Index>(i)) = v[i] * (best_c * wave.cos[i] + best_s * wave.sin[i]);
   const double ripple_sq = (ripple - a * qr.solve(ripple)).squaredNorm();
   if (none - best < 0.5 * ripple_sq) return std::nullopt;
   return std::pair{best_c, best_s};
@@ -166,7 +177,7 @@ std::optional<ReferenceRipple> fifth_wheel_ripple(const std::vector<double>& t_s
   if (!out.found) return out;
   out.c = at.c;
   out.s = at.s;
-  out.v_mps = without_ripple(v_mps, angle, at.c, at.s);
+  out.v_mps = without_ripple(v_mps, unsmoothed_wave(angle), at.c, at.s);
   return out;
 }
 
@@ -191,17 +202,18 @@ std::string share_fifth_wheel_ripple(std::vector<Run>& runs) {
     if (others.empty()) continue;
     const double theirs = median_of(others);
     if (std::abs(r.ref_ripple_amplitude / theirs - 1) <= kRippleAgreement) continue;
-    // The speed with its own estimate multiplied back in, the phase scanned at theirs.
+    // The speed with its own estimate multiplied back in, the phase scanned at theirs (the
+    // run's speed is smoothed: its ripple is the wave the smoother passed).
+    const Run::Wave wave = encoder_wave(r, 1);
     std::vector<double> v = r.v_ref_mps;
     for (std::size_t i = 0; i < v.size(); ++i)
-      v[i] *= 1.0 + r.ref_ripple_c * std::cos(r.ref_angle_rad[i]) +
-              r.ref_ripple_s * std::sin(r.ref_angle_rad[i]);
-    const auto placed = place_phase(v, r.ref_angle_rad, theirs);
+      v[i] *= 1.0 + r.ref_ripple_c * wave.cos[i] + r.ref_ripple_s * wave.sin[i];
+    const auto placed = place_phase(v, r.ref_angle_rad, wave, theirs);
     if (!placed) continue;
     // The slip, the deceleration and the noise probe carry the own estimate's removal: the
     // difference is taken out (first order in the ripple, as its removal is).
     take_out_reference_ripple(r, placed->first - r.ref_ripple_c, placed->second - r.ref_ripple_s);
-    r.v_ref_mps = without_ripple(v, r.ref_angle_rad, placed->first, placed->second);
+    r.v_ref_mps = without_ripple(v, wave, placed->first, placed->second);
     r.ref_ripple_amplitude = theirs;
     r.ref_ripple_c = placed->first;
     r.ref_ripple_s = placed->second;
@@ -215,9 +227,10 @@ std::string share_fifth_wheel_ripple(std::vector<Run>& runs) {
       continue;
     if (r.ref_angle_rad.back() < 2 * M_PI * kSharedRippleRevolutions) continue;
     ++looked;
-    const auto cs = place_phase(r.v_ref_mps, r.ref_angle_rad, amp);
+    const Run::Wave wave = encoder_wave(r, 1);
+    const auto cs = place_phase(r.v_ref_mps, r.ref_angle_rad, wave, amp);
     if (!cs) continue;
-    r.v_ref_mps = without_ripple(r.v_ref_mps, r.ref_angle_rad, cs->first, cs->second);
+    r.v_ref_mps = without_ripple(r.v_ref_mps, wave, cs->first, cs->second);
     take_out_reference_ripple(r, cs->first, cs->second);
     r.ref_ripple_amplitude = amp;
     r.ref_ripple_c = cs->first;
@@ -225,14 +238,16 @@ std::string share_fifth_wheel_ripple(std::vector<Run>& runs) {
     r.ref_ripple_from_speed = true;
     ++placed;
   }
-  // Where it could not be placed it stays in the run: its slip noise carries it (amplitude /
-  // sqrt 2 of 1 - s), so the floor is honest about it, as for the residual's estimate.
+  // Where it could not be placed it stays in the run: its slip noise carries it (the RMS of the
+  // smoothed wave at that amplitude, times 1 - s), so the floor is honest about it, as for the
+  // residual's estimate.
   int found = 0;
   for (Run& r : runs) {
     found += r.ref_ripple_amplitude > 0 ? 1 : 0;
     if (r.ref_ripple_amplitude > 0) continue;
+    const Run::Wave wave = encoder_wave(r, 1);
     for (std::size_t i = 0; i < r.slip_sd.size() && i < r.slip.size(); ++i)
-      r.slip_sd[i] = std::hypot(r.slip_sd[i], amp / std::sqrt(2.0) * (1 - r.slip[i]));
+      r.slip_sd[i] = std::hypot(r.slip_sd[i], amp * wave_rms(wave, i) * (1 - r.slip[i]));
   }
   std::string out = fmt::format(
       "the fifth wheel's ripple (once per revolution) was read from its own speed and taken out "

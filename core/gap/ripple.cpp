@@ -24,6 +24,13 @@ namespace {
 /// from the run's own trend; a shorter run (down to kMinPhaseRevolutions) takes the amplitude
 /// found on the longer runs of the same encoder and estimates only its phase.
 constexpr double kMinRevolutions = 1.5;
+/// A run must hold this many samples for a ripple's phase to be placed on it at its encoder's
+/// amplitude (a linear trend and two encoders' cos and sin leave it six degrees of freedom),
+/// and kMinAmplitudeSamples for the amplitude to be read on it. A 50 Hz export's ground runs
+/// hold 10-25 samples to the lock, and at 35 km/h a wheel's ripple leaves 35 N there. (Read
+/// over 11-14 samples, a heavy vehicle's set took a reference amplitude of 1e-3 for 2.2e-4.)
+constexpr std::size_t kMinRippleSamples = 12;
+constexpr std::size_t kMinAmplitudeSamples = 20;
 constexpr double kMinPhaseRevolutions = 0.5;
 /// Shorter still (B's 60 bar/s roller stops turn the wheel 0.4-0.8 times), the phase alone is
 /// scanned down to this. (Where a longer run's free phase fit disagrees with the encoder's
@@ -63,12 +70,23 @@ ColumnPair ripple_columns(const Run& r, const Model& m, std::size_t e, double fr
   const std::size_t n = r.t_s.size();
   const double sign = e == 0 ? 1.0 : -1.0;
   constexpr double kH = 1e-5;  // slip
-  auto answer = [&](auto wave) {
+  // At the revolution rate the wave as the smoother passed it; the neighbouring rates of the
+  // narrow-band check are read unsmoothed.
+  Run::Wave at_rate;
+  if (frequency_scale == 1.0) {
+    at_rate = encoder_wave(r, e);
+  } else {
+    const std::vector<double>& angle = e == 0 ? r.wheel_angle_rad : r.ref_angle_rad;
+    for (std::size_t i = 0; i < n; ++i) {
+      at_rate.cos.push_back(std::cos(frequency_scale * angle[i]));
+      at_rate.sin.push_back(std::sin(frequency_scale * angle[i]));
+    }
+  }
+  auto answer = [&](const std::vector<double>& wave) {
     Run up = r, down = r;
     up.pressure_filter_s = down.pressure_filter_s = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      const double ang = frequency_scale * (e == 0 ? r.wheel_angle_rad[i] : r.ref_angle_rad[i]);
-      const double d = kH * sign * (1 - r.slip[i]) * wave(ang);
+      const double d = kH * sign * (1 - r.slip[i]) * wave[i];
       up.slip[i] += d;
       down.slip[i] -= d;
     }
@@ -78,8 +96,7 @@ ColumnPair ripple_columns(const Run& r, const Model& m, std::size_t e, double fr
     if (r.pressure_filter_s > 0) filter_first_order(r.t_s, col, r.pressure_filter_s, col.front());
     return col;
   };
-  return {answer([](double a) { return std::cos(a); }),
-          answer([](double a) { return std::sin(a); })};
+  return {answer(at_rate.cos), answer(at_rate.sin)};
 }
 
 /// One run's ripple columns through the model, each encoder and rate computed once: the
@@ -231,7 +248,8 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const Run& r = runs[k];
     const std::size_t n = r.t_s.size();
-    if (n < 30 || r.wheel_angle_rad.size() != n || r.ref_angle_rad.size() != n) continue;
+    if (n < kMinRippleSamples || r.wheel_angle_rad.size() != n || r.ref_angle_rad.size() != n)
+      continue;
     const auto f = predict(r, params, baseline);
     Prepared& p = prep[k];
     // Residual = the model's answer to (1 - s) (eps_wheel - eps_ref) for speed ripples eps
@@ -245,7 +263,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   int corrected = 0, uncorrected = 0;
   std::array<std::vector<double>, 2> amps;
   for (std::size_t k = 0; k < runs.size(); ++k) {
-    if (prep[k].residual.empty()) continue;
+    if (prep[k].residual.size() < kMinAmplitudeSamples) continue;
     const std::array<bool, 2> use{
         prep[k].revolutions[0] >= kMinRevolutions,
         prep[k].revolutions[1] >= kMinRevolutions && !runs[k].ref_ripple_from_speed};
@@ -288,7 +306,8 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   // and their phase from a regression with a linear trend, when that regression's own amplitude
   // agrees with it (within a factor of 2); a run under half a revolution from a scan of the
   // phase alone at that amplitude. Where neither places it, the ripple stays in the run and its
-  // slip noise carries it (amplitude / sqrt 2 of (1 - s)): the floor is honest about it.
+  // slip noise carries it (the RMS of the smoothed wave at that amplitude, times 1 - s): the
+  // floor is honest about what the smoother left of it.
   for (std::size_t k = 0; k < runs.size(); ++k) {
     if (prep[k].residual.empty()) continue;
     std::array<bool, 2> use{};
@@ -306,8 +325,12 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
         fits[k].s[e] = short_fit.s[e] * amplitude[e] / amp;
         continue;
       }
+      // A free amplitude too uncertain to confirm the encoder's (within two of its standard
+      // errors: a 50 Hz run of 25 samples over 13 revolutions read 1.2e-4 +- 1.4e-4 for 3.6e-4)
+      // is no sign of more than the ripple: its phase is scanned as a short run's is.
+      const bool uncertain = std::abs(amp - amplitude[e]) < 2 * short_fit.se[e];
       if (prep[k].revolutions[e] >= kMinScanRevolutions &&
-          prep[k].revolutions[e] < kMinPhaseRevolutions)
+          (prep[k].revolutions[e] < kMinPhaseRevolutions || uncertain))
         if (const auto cs = scan_phase(columns[k], prep[k].residual, e, amplitude[e])) {
           fits[k].used[e] = true;
           fits[k].c[e] = (*cs)[0];
@@ -315,8 +338,9 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
           continue;
         }
       Run& r = runs[k];
+      const Run::Wave wave = encoder_wave(r, e);
       for (std::size_t i = 0; i < r.slip_sd.size(); ++i)
-        r.slip_sd[i] = std::hypot(r.slip_sd[i], amplitude[e] / std::sqrt(2.0) * (1 - r.slip[i]));
+        r.slip_sd[i] = std::hypot(r.slip_sd[i], amplitude[e] * wave_rms(wave, i) * (1 - r.slip[i]));
       ++uncorrected;
     }
   }

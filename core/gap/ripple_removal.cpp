@@ -12,17 +12,6 @@ namespace brakefit::gap {
 
 namespace {
 
-/// d angle / dt at each point (central differences of the rolled angle, one-sided at the ends).
-std::vector<double> angle_rate(const std::vector<double>& t_s, const std::vector<double>& angle) {
-  const std::size_t n = t_s.size();
-  std::vector<double> w(n, 0.0);
-  for (std::size_t i = 0; i < n && n > 1; ++i) {
-    const std::size_t a = i == 0 ? 0 : i - 1, b = i + 1 == n ? n - 1 : i + 1;
-    w[i] = (angle[b] - angle[a]) / std::max(t_s[b] - t_s[a], 1e-9);
-  }
-  return w;
-}
-
 /// The slip's ripple correction (1 - s) (eps_wheel - eps_ref) at the encoders' angles.
 double ripple_fix(const SpeedRipple& fit, double slip, double wheel_angle_rad,
                   double ref_angle_rad) {
@@ -46,29 +35,66 @@ std::vector<double> raw_slip_without(const Run::NoiseProbe& p, const SpeedRipple
 
 /// Takes a fitted ripple out of a run: a speed read as v (1 + eps(angle)) gives the slip
 /// s - (1 - s) eps_wheel + (1 - s) eps_ref, and its derivative carries v eps' (the wheel's
-/// acceleration, the reference's deceleration).
+/// acceleration, the reference's deceleration). eps is the wave as the smoother passed it, and
+/// its rate the same central difference the conditioning took of the smoothed speed.
 void remove_ripple(Run& r, const SpeedRipple& fit) {
   const std::size_t n = r.slip.size();
+  std::vector<double> slip_fix(n, 0.0);
   for (std::size_t e = 0; e < 2; ++e) {
     if (!fit.used[e]) continue;
-    const std::vector<double>& angle = e == 0 ? r.wheel_angle_rad : r.ref_angle_rad;
-    const std::vector<double> rate = angle_rate(r.t_s, angle);
+    const Run::Wave wave = encoder_wave(r, e);
+    std::vector<double> eps(n);
+    for (std::size_t i = 0; i < n; ++i) eps[i] = fit.c[e] * wave.cos[i] + fit.s[e] * wave.sin[i];
+    const std::vector<double> eps_rate = derivative(r.t_s, eps);
     std::vector<double>& d = e == 0 ? r.wheel_accel_mps2 : r.ref_decel_mps2;
     const double sign = e == 0 ? 1.0 : -1.0;  // d is +d v_wheel / dt, -d v_ref / dt
     for (std::size_t i = 0; i < n; ++i) {
-      const double c = std::cos(angle[i]), s = std::sin(angle[i]);
-      const double eps = fit.c[e] * c + fit.s[e] * s;
-      const double eps_rate = (-fit.c[e] * s + fit.s[e] * c) * rate[i];
       const double v_mps = e == 0 ? r.v_ref_mps[i] * (1 - r.slip[i]) : r.v_ref_mps[i];
-      if (i < d.size()) d[i] = d[i] * (1 - eps) - sign * v_mps * eps_rate;
+      if (i < d.size()) d[i] = d[i] * (1 - eps[i]) - sign * v_mps * eps_rate[i];
+      slip_fix[i] += sign * (1 - r.slip[i]) * eps[i];
     }
   }
   // s_measured = s - (1 - s) eps_wheel + (1 - s) eps_ref: the ripple is added back.
-  for (std::size_t i = 0; i < n; ++i)
-    r.slip[i] += ripple_fix(fit, r.slip[i], r.wheel_angle_rad[i], r.ref_angle_rad[i]);
+  for (std::size_t i = 0; i < n; ++i) r.slip[i] += slip_fix[i];
 }
 
 }  // namespace
+
+Run::Wave smoothed_wave(const std::vector<double>& v, const std::vector<double>& v_smooth,
+                        const std::vector<double>& angle_rad, int half_window) {
+  const std::size_t n = v.size();
+  std::vector<double> vc(n), vs(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    vc[i] = v[i] * std::cos(angle_rad[i]);
+    vs[i] = v[i] * std::sin(angle_rad[i]);
+  }
+  Run::Wave w{smooth(vc, half_window), smooth(vs, half_window)};
+  for (std::size_t i = 0; i < n; ++i) {
+    // At rest (no speed) the ripple has no size: the unsmoothed wave keeps the columns finite.
+    if (std::abs(v_smooth[i]) > 1e-6) {
+      w.cos[i] /= v_smooth[i];
+      w.sin[i] /= v_smooth[i];
+    } else {
+      w.cos[i] = std::cos(angle_rad[i]);
+      w.sin[i] = std::sin(angle_rad[i]);
+    }
+  }
+  return w;
+}
+
+Run::Wave encoder_wave(const Run& r, std::size_t e) {
+  const std::size_t n = r.t_s.size();
+  if (const Run::Wave& w = r.encoder_wave[e]; w.cos.size() == n && w.sin.size() == n) return w;
+  const std::vector<double>& angle = e == 0 ? r.wheel_angle_rad : r.ref_angle_rad;
+  Run::Wave w;
+  for (std::size_t i = 0; i < n && i < angle.size(); ++i) {
+    w.cos.push_back(std::cos(angle[i]));
+    w.sin.push_back(std::sin(angle[i]));
+  }
+  w.cos.resize(n, 1.0);
+  w.sin.resize(n, 0.0);
+  return w;
+}
 
 void take_out_ripple(Run& r, const SpeedRipple& ripple, ProbeAfter probe_after) {
   remove_ripple(r, ripple);
