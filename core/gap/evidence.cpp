@@ -159,6 +159,28 @@ std::optional<MissingEvidence> threshold_off_the_rest(const EffectScore& e,
       "the wheel rested below the fitted curve's foot"};
 }
 
+/// A threshold that takes the measured force as its own: the fitted curve's peak D under
+/// kThresholdMinCurveShare of the largest force measured (generator B's heavy vehicles: a 2.1-3.1
+/// bar threshold of a 3-4 bar stop fitted with D at 0-50 N of 20-30 kN, for a time offset, a
+/// slip offset, speed friction, a relaxation length or nothing).
+std::optional<MissingEvidence> threshold_without_a_curve(const EffectScore& e, const Fit& f,
+                                                         const std::vector<Run>& runs) {
+  double force_max_n = 0;
+  for (const Run& r : runs)
+    for (const double x : r.force_n) force_max_n = std::max(force_max_n, x);
+  const double peak_n = f.params.at(2);
+  if (!(force_max_n > 0) || peak_n >= kThresholdMinCurveShare * force_max_n) return {};
+  return MissingEvidence{
+      fmt::format(
+          "a brake threshold of {:.2f} bar fits{{}} (held-out gain {:.3f}) only with a tyre "
+          "curve that peaks at {:.0f} N, {:.1f} % of the largest force measured ({:.0f} "
+          "N): below the threshold the model repeats the measured force and the curve "
+          "carries none of it (a tyre that locks keeps at least {:.0f} %); not accepted",
+          e.params[0].second, e.gain, peak_n, 100 * peak_n / force_max_n, force_max_n,
+          100 * kThresholdMinCurveShare),
+      "the fitted tyre carries no force"};
+}
+
 }  // namespace
 
 std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
@@ -187,6 +209,7 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
         "a flat-topped curve fits alike (no kink at the cap)"};
   }
   if (e.effect == Effect::BrakeThreshold) {
+    if (auto missing = threshold_without_a_curve(e, f, runs)) return missing;
     if (auto missing = threshold_off_the_rest(e, model, f, runs)) return missing;
   }
   // The dead zone's free-rolling wheel, on the roller only: on the ground the other brakes slow the

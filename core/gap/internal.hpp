@@ -292,6 +292,12 @@ inline constexpr double kMinMagnitudeZ = 2.0;
 /// A brake threshold whose runs rested below the fitted curve's foot: refused where the tyre's
 /// force at the rest (at its initial stiffness) is at least this share of the threshold's.
 inline constexpr double kThresholdMinRestForceShare = 0.5;
+/// A brake threshold whose fitted tyre peaks under this share of the largest force measured is
+/// refused: below the threshold the model repeats the measured force (gain min(p, p0)), so a
+/// threshold near the runs' top pressure fits any of them with a curve that carries nothing.
+/// A threshold that lets the wheel lock leaves the tyre its peak: the measured peak less the
+/// threshold's force (B's largest, 30 bar against a 45-75 bar lock, leaves it a third).
+inline constexpr double kThresholdMinCurveShare = 0.25;
 /// `e` the candidate, the last effect of `model`, fitted as `f`.
 std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
                                                 const std::vector<Effect>& model, const Fit& f,

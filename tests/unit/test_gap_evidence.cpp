@@ -1,7 +1,7 @@
 // The evidence only one effect leaves (issue 34): a brake threshold holds the wheel rolling free
-// while the pressure rises to it; a steep foot of a curve that is not a Magic Formula does not. A
-// slip offset reads as itself while the wheel rolls free, and so does the tyre's own shift; speed
-// friction needs roller speeds apart.
+// while the pressure rises to it, and leaves the tyre its curve; a steep foot of a curve that is
+// not a Magic Formula does not. A slip offset reads as itself while the wheel rolls free, and so
+// does the tyre's own shift; speed friction needs roller speeds apart.
 // A first effect leaves no structure most of which no candidate explains (the fit-quality check).
 #include <gtest/gtest.h>
 
@@ -67,6 +67,25 @@ TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
   gap::Run late = rise(false);
   for (double& x : late.force_n) x += 200.0;
   EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {late, late}).has_value());
+}
+
+TEST(GapEvidence, ABrakeThresholdMustLeaveTheTyreItsCurve) {
+  // Below the threshold the model repeats the measured force: a threshold near the runs' top
+  // pressure fits them with a curve that carries nothing (D at zero). The runs' force reaches
+  // 1200 N; a curve that peaks at 3125 N, or at 400 N, leaves the tyre its force.
+  auto [s, f] = candidate(gap::Effect::BrakeThreshold, "p0_bar", 2.0);
+  for (const double peak_n : {3125.0, 400.0}) {
+    f.params[2] = peak_n;
+    EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {rise(true), rise(true)}).has_value())
+        << peak_n;
+  }
+  for (const double peak_n : {0.0, 250.0}) {
+    f.params[2] = peak_n;
+    const auto missing = gap::missing_evidence(s, {s.effect}, f, {rise(true), rise(true)});
+    ASSERT_TRUE(missing.has_value()) << peak_n;
+    EXPECT_NE(missing->note.find("the curve carries none of it"), std::string::npos)
+        << missing->note;
+  }
 }
 
 TEST(GapEvidence, ABrakeThresholdsTyreRollsFreeWhereTheWheelRested) {
