@@ -189,6 +189,9 @@ void take_out_ripple(Run& r, const SpeedRipple& ripple, ProbeAfter probe_after);
 /// rolled on it (ripple_removal.cpp).
 Run::Wave smoothed_wave(const std::vector<double>& v, const std::vector<double>& v_smooth,
                         const std::vector<double>& angle_rad, int half_window);
+/// cos and sin of the angle (times frequency_scale): the wave of a speed read before the
+/// smoother.
+Run::Wave unsmoothed_wave(const std::vector<double>& angle_rad, double frequency_scale = 1.0);
 /// Run r's wave for encoder e (0 the wheel, 1 the reference): as its smoother passed it, or cos
 /// and sin of its angle where the run carries none.
 Run::Wave encoder_wave(const Run& r, std::size_t e);

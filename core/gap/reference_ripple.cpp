@@ -92,16 +92,6 @@ SpeedFit fit_speed(const std::vector<double>& v, const std::vector<double>& angl
   return out;
 }
 
-/// cos and sin of the angle: the wave of a speed read before the smoother.
-Run::Wave unsmoothed_wave(const std::vector<double>& angle) {
-  Run::Wave w;
-  for (const double a : angle) {
-    w.cos.push_back(std::cos(a));
-    w.sin.push_back(std::sin(a));
-  }
-  return w;
-}
-
 /// The speed read as v (1 + c cos + s sin of the angle, as the wave carries it), with that
 /// ripple divided out.
 std::vector<double> without_ripple(const std::vector<double>& v, const Run::Wave& wave, double c,

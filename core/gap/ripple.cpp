@@ -72,16 +72,10 @@ ColumnPair ripple_columns(const Run& r, const Model& m, std::size_t e, double fr
   constexpr double kH = 1e-5;  // slip
   // At the revolution rate the wave as the smoother passed it; the neighbouring rates of the
   // narrow-band check are read unsmoothed.
-  Run::Wave at_rate;
-  if (frequency_scale == 1.0) {
-    at_rate = encoder_wave(r, e);
-  } else {
-    const std::vector<double>& angle = e == 0 ? r.wheel_angle_rad : r.ref_angle_rad;
-    for (std::size_t i = 0; i < n; ++i) {
-      at_rate.cos.push_back(std::cos(frequency_scale * angle[i]));
-      at_rate.sin.push_back(std::sin(frequency_scale * angle[i]));
-    }
-  }
+  const Run::Wave at_rate =
+      frequency_scale == 1.0
+          ? encoder_wave(r, e)
+          : unsmoothed_wave(e == 0 ? r.wheel_angle_rad : r.ref_angle_rad, frequency_scale);
   auto answer = [&](const std::vector<double>& wave) {
     Run up = r, down = r;
     up.pressure_filter_s = down.pressure_filter_s = 0;

@@ -82,16 +82,20 @@ Run::Wave smoothed_wave(const std::vector<double>& v, const std::vector<double>&
   return w;
 }
 
+Run::Wave unsmoothed_wave(const std::vector<double>& angle_rad, double frequency_scale) {
+  Run::Wave w;
+  for (const double a : angle_rad) {
+    w.cos.push_back(std::cos(frequency_scale * a));
+    w.sin.push_back(std::sin(frequency_scale * a));
+  }
+  return w;
+}
+
 Run::Wave encoder_wave(const Run& r, std::size_t e) {
   const std::size_t n = r.t_s.size();
   if (const Run::Wave& w = r.encoder_wave[e]; w.cos.size() == n && w.sin.size() == n) return w;
-  const std::vector<double>& angle = e == 0 ? r.wheel_angle_rad : r.ref_angle_rad;
-  Run::Wave w;
-  for (std::size_t i = 0; i < n && i < angle.size(); ++i) {
-    w.cos.push_back(std::cos(angle[i]));
-    w.sin.push_back(std::sin(angle[i]));
-  }
-  w.cos.resize(n, 1.0);
+  Run::Wave w = unsmoothed_wave(e == 0 ? r.wheel_angle_rad : r.ref_angle_rad);
+  w.cos.resize(n, 1.0);  // a run without angles: a wave of no phase, at no point read
   w.sin.resize(n, 0.0);
   return w;
 }
