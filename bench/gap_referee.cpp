@@ -145,6 +145,10 @@ int run(int argc, char** argv) {
       std::cerr << "gap_referee: generator C's script " << gen_c << " is not there (--gen-c)\n";
       return 66;
     }
+    if (const auto missing = bench::outside_generator_missing(); !missing.empty()) {
+      std::cerr << "gap_referee: " << missing << "\n";
+      return 69;
+    }
     sim::set_outside_runs([gen_c](sim::Injection& inj, std::uint64_t seed) {
       return bench::outside_runs(gen_c, inj, seed);
     });

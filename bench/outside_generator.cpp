@@ -19,7 +19,7 @@ namespace {
 
 std::string slurp(const std::filesystem::path& p) {
   std::ifstream in(p);
-  if (!in) throw InputError(fmt::format("{}: cannot read", p.string()));
+  if (!in) throw GeneratorError(fmt::format("{}: cannot read", p.string()));
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
@@ -35,7 +35,7 @@ double d_ln_d_per_ln_fz(const std::string& tyre, double fz_n) {
                                                    {"sedan_pac02", {3928.5, 1.1739, -0.16395}},
                                                    {"mf61_255_55", {6752.0, 1.1632, -0.11154}}};
   const auto it = tyres.find(tyre);
-  if (it == tyres.end()) throw InputError(fmt::format("generator C: unknown tyre '{}'", tyre));
+  if (it == tyres.end()) throw GeneratorError(fmt::format("generator C: unknown tyre '{}'", tyre));
   const Pdx& t = it->second;
   const double dfz = (fz_n - t.fz0) / t.fz0;
   return 1.0 + t.pdx2 * (fz_n / t.fz0) / (t.pdx1 + t.pdx2 * dfz);
@@ -46,11 +46,17 @@ constexpr double kLoadPerDecelPerHoverL = 1.7 / 9.81;
 
 }  // namespace
 
+std::string outside_generator_missing() {
+  if (std::system("/usr/bin/python3 -c 'import numpy' >/dev/null 2>&1") == 0) return {};
+  return "generator C imports numpy, which /usr/bin/python3 cannot: apt-get install python3-numpy";
+}
+
 std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& inj,
                                    std::uint64_t seed) {
   namespace fs = std::filesystem;
   std::string dir_template = (fs::temp_directory_path() / "brakefit-genc-XXXXXX").string();
-  if (!mkdtemp(dir_template.data())) throw InputError("generator C: cannot make a temp directory");
+  if (!mkdtemp(dir_template.data()))
+    throw GeneratorError("generator C: cannot make a temp directory");
   const fs::path dir = dir_template;
   struct Cleanup {
     fs::path d;
@@ -68,7 +74,7 @@ std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& in
       has_magnitude ? fmt::format(" --magnitude {:.9g}", inj.magnitude) : "",
       (dir / "stderr").string());
   if (std::system(cmd.c_str()) != 0)
-    throw InputError(fmt::format("generator C failed: {}: {}", cmd, slurp(dir / "stderr")));
+    throw GeneratorError(fmt::format("generator C failed: {}: {}", cmd, slurp(dir / "stderr")));
   const auto truth = nlohmann::json::parse(slurp(dir / "truth.json"));
   std::vector<gap::Run> out;
   double wheel_load_n = NAN;

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstddef>
+#include <exception>
 #include <functional>
 #include <iostream>
 #include <mutex>
@@ -22,26 +23,35 @@ inline double quantile(std::vector<double> v, double q) {
   return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
 }
 
-/// results[i] = f(i) for i < n on `threads` threads, with progress every 20 done.
+/// results[i] = f(i) for i < n on `threads` threads, with progress every 20 done. The first
+/// exception f throws stops the other workers at their next item and is rethrown here.
 template <class T>
 std::vector<T> parallel_map(int n, int threads, const std::function<T(int)>& f,
                             const std::string& what) {
   std::vector<T> out(static_cast<std::size_t>(std::max(0, n)));
   std::atomic<int> next{0}, done{0};
   std::mutex log;
+  std::exception_ptr failed;
   auto worker = [&] {
-    for (int i = next++; i < n; i = next++) {
-      out[static_cast<std::size_t>(i)] = f(i);
-      const int d = ++done;
-      if (d % 20 == 0 || d == n) {
-        std::lock_guard lock(log);
-        std::cerr << fmt::format("  {}: {}/{}\n", what, d, n);
+    try {
+      for (int i = next++; i < n; i = next++) {
+        out[static_cast<std::size_t>(i)] = f(i);
+        const int d = ++done;
+        if (d % 20 == 0 || d == n) {
+          std::lock_guard lock(log);
+          std::cerr << fmt::format("  {}: {}/{}\n", what, d, n);
+        }
       }
+    } catch (...) {
+      std::lock_guard lock(log);
+      if (!failed) failed = std::current_exception();
+      next = n;
     }
   };
   std::vector<std::thread> pool;
   for (int t = 0; t < std::max(1, threads); ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
+  if (failed) std::rethrow_exception(failed);
   return out;
 }
 

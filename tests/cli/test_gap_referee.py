@@ -71,6 +71,21 @@ class RefereeResults(unittest.TestCase):
         self.assertNotEqual(r.returncode, 0)
         self.assertIn("/nonexistent/dir/results.md", r.stderr)
 
+    def test_a_generator_that_fails_stops_the_referee_instead_of_counting_refusals(self):
+        # A set never made is not a set the diagnosis refused: the calibration once counted 20
+        # "refused" null sets of generator C where its script could not import numpy.
+        with tempfile.TemporaryDirectory() as tmp:
+            script = os.path.join(tmp, "broken_gen.py")
+            with open(script, "w") as f:
+                f.write("import sys\nsys.exit('broken on purpose')\n")
+            r = subprocess.run([REFEREE, "--condition", "ground", "--generators", "C",
+                                "--trials", "0", "--calibrate", "3", "--threads", "2",
+                                "--gen-c", script], capture_output=True, text=True, timeout=600)
+            self.assertNotEqual(r.returncode, 0)
+            self.assertIn(script, r.stderr)
+            self.assertIn("broken on purpose", r.stderr)
+            self.assertNotIn("refused by the diagnosis", r.stderr)
+
 
 if __name__ == "__main__":
     unittest.main()
