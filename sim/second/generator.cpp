@@ -265,10 +265,41 @@ double d_ln_d_per_ln_fz(const Mf61Longitudinal& t, double fz_n, double pressure_
   return std::log(peak(fz_n * 1.02) / peak(fz_n / 1.02)) / std::log(1.02 * 1.02);
 }
 
+/// An effect this generator injects, with a magnitude its law can take: an unknown name would
+/// make a null set labelled with it, and a wheel without inertia a wheel equation that never
+/// steps on (w' = (F R - Tb) / I).
+void check_effect(const std::string& effect, double magnitude) {
+  struct Law {
+    const char* name;
+    double lo, hi;  // the magnitude's range, open at lo where lo_open
+    bool lo_open;
+  };
+  static constexpr std::array<Law, 9> laws = {{{"none", -INFINITY, INFINITY, false},
+                                               {"misspecified", -INFINITY, INFINITY, false},
+                                               {"load_transfer", -INFINITY, INFINITY, false},
+                                               {"relaxation_length", 0.0, 10.0, false},
+                                               {"wheel_inertia", 0.0, 200.0, true},
+                                               {"brake_threshold", 0.0, 100.0, false},
+                                               {"time_offset", -1.0, 1.0, false},
+                                               {"slip_offset", -0.5, 0.5, false},
+                                               {"speed_friction", 0.0, 100.0, false}}};
+  std::string known;
+  for (const Law& l : laws) {
+    known += (known.empty() ? "" : ", ") + std::string(l.name);
+    if (effect != l.name) continue;
+    const bool above = l.lo_open ? magnitude > l.lo : magnitude >= l.lo;
+    if (std::isfinite(magnitude) && above && magnitude <= l.hi) return;
+    throw InputError(fmt::format("generator B: {} magnitude {} is outside {}{}, {}]", effect,
+                                 magnitude, l.lo_open ? "(" : "[", l.lo, l.hi));
+  }
+  throw InputError(fmt::format("generator B: unknown effect '{}' (known: {})", effect, known));
+}
+
 }  // namespace
 
 SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, std::uint64_t seed,
                  Stations stations) {
+  for (const auto& [effect, magnitude] : effects) check_effect(effect, magnitude);
   Rng rng(seed * 7919 + 17);
   // The wider station draws take their own stream: a Cars set of a seed stays what it was.
   Rng srng(seed * 104729 + 5);

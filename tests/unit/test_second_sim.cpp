@@ -104,6 +104,26 @@ TEST(SecondSim, TheMisspecifiedRoadTyreHasNoSpeedFriction) {
   }
 }
 
+TEST(SecondSim, AnEffectItCannotInjectIsAnErrorNamingIt) {
+  // A wheel without inertia never stepped on (w' = (F R - Tb) / I: second_sim ran on past 20 s);
+  // an unknown name made a null set labelled with it.
+  auto message = [](const std::string& effect, double magnitude) -> std::string {
+    try {
+      sim2::draw_set(can::BenchKind::Roller, effect, magnitude, 3);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(message("wheel_inertia", 0.0).find("wheel_inertia magnitude 0"), std::string::npos);
+  EXPECT_NE(message("wheel_inertia", -1.0).find("wheel_inertia"), std::string::npos);
+  EXPECT_NE(message("brake_threshold", -0.5).find("brake_threshold"), std::string::npos);
+  EXPECT_NE(message("relaxation_lenght", 0.1).find("unknown effect 'relaxation_lenght'"),
+            std::string::npos);
+  EXPECT_EQ(message("wheel_inertia", 0.5), "");
+  EXPECT_EQ(message("slip_offset", -0.004), "");
+}
+
 TEST(SecondSim, ItsExportIsReadAsTheEventsItHolds) {
   for (auto bench : {can::BenchKind::Roller, can::BenchKind::Ground}) {
     const auto set = sim2::draw_set(bench, "none", 0.0, 3);
