@@ -41,14 +41,19 @@ double d_ln_d_per_ln_fz(const std::string& tyre, double fz_n) {
   return 1.0 + t.pdx2 * (fz_n / t.fz0) / (t.pdx1 + t.pdx2 * dfz);
 }
 
+/// The interpreter the script runs under (Debian's, where python3-numpy installs numpy).
+constexpr const char* kPython = "/usr/bin/python3";
+
 /// The script's vehicle: mass 3.4 Fz0 / g, this wheel's load Fz0 + m (h/L) a / 2.
 constexpr double kLoadPerDecelPerHoverL = 1.7 / 9.81;
 
 }  // namespace
 
 std::string outside_generator_missing() {
-  if (std::system("/usr/bin/python3 -c 'import numpy' >/dev/null 2>&1") == 0) return {};
-  return "generator C imports numpy, which /usr/bin/python3 cannot: apt-get install python3-numpy";
+  if (std::system(fmt::format("{} -c 'import numpy' >/dev/null 2>&1", kPython).c_str()) == 0)
+    return {};
+  return fmt::format("generator C imports numpy, which {} cannot: apt-get install python3-numpy",
+                     kPython);
 }
 
 std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& inj,
@@ -69,7 +74,7 @@ std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& in
   const std::string effect = inj.effect == "misspecified" ? "misspec" : inj.effect;
   const bool has_magnitude = effect != "none" && effect != "misspec";
   const std::string cmd = fmt::format(
-      "/usr/bin/python3 '{}' '{}' --bench {} --effect {} --seed {}{} >/dev/null 2>'{}'", script,
+      "{} '{}' '{}' --bench {} --effect {} --seed {}{} >/dev/null 2>'{}'", kPython, script,
       dir.string(), ground ? "ground" : "roller", effect, seed % 4'000'000'000ULL,
       has_magnitude ? fmt::format(" --magnitude {:.9g}", inj.magnitude) : "",
       (dir / "stderr").string());

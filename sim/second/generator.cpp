@@ -283,16 +283,17 @@ void check_effect(const std::string& effect, double magnitude) {
                                                {"time_offset", -1.0, 1.0, false},
                                                {"slip_offset", -0.5, 0.5, false},
                                                {"speed_friction", 0.0, 100.0, false}}};
-  std::string known;
-  for (const Law& l : laws) {
-    known += (known.empty() ? "" : ", ") + std::string(l.name);
-    if (effect != l.name) continue;
-    const bool above = l.lo_open ? magnitude > l.lo : magnitude >= l.lo;
-    if (std::isfinite(magnitude) && above && magnitude <= l.hi) return;
-    throw InputError(fmt::format("generator B: {} magnitude {} is outside {}{}, {}]", effect,
-                                 magnitude, l.lo_open ? "(" : "[", l.lo, l.hi));
+  const auto l =
+      std::find_if(laws.begin(), laws.end(), [&](const Law& law) { return effect == law.name; });
+  if (l == laws.end()) {
+    std::string known;
+    for (const Law& law : laws) known += (known.empty() ? "" : ", ") + std::string(law.name);
+    throw InputError(fmt::format("generator B: unknown effect '{}' (known: {})", effect, known));
   }
-  throw InputError(fmt::format("generator B: unknown effect '{}' (known: {})", effect, known));
+  const bool above = l->lo_open ? magnitude > l->lo : magnitude >= l->lo;
+  if (!std::isfinite(magnitude) || !above || magnitude > l->hi)
+    throw InputError(fmt::format("generator B: {} magnitude {} is outside {}{}, {}]", effect,
+                                 magnitude, l->lo_open ? "(" : "[", l->lo, l->hi));
 }
 
 }  // namespace
