@@ -40,6 +40,29 @@ std::vector<bool> free_set(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
 
 }  // namespace
 
+Eigen::VectorXd standard_errors_holding(const LmResult& r, const std::vector<bool>& held) {
+  const Eigen::Index n = r.x.size();
+  Eigen::VectorXd out = Eigen::VectorXd::Constant(n, NAN);
+  std::vector<Eigen::Index> idx;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (!(k < r.at_bound.size() && r.at_bound[k]) && !(k < held.size() && held[k]))
+      idx.push_back(i);
+  }
+  const auto p = static_cast<Eigen::Index>(idx.size());
+  if (p == 0 || r.residuals <= p || r.jtj.rows() != n) return out;
+  Eigen::MatrixXd af(p, p);
+  for (Eigen::Index u = 0; u < p; ++u)
+    for (Eigen::Index v = 0; v < p; ++v)
+      af(u, v) = r.jtj(idx[static_cast<std::size_t>(u)], idx[static_cast<std::size_t>(v)]);
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(af);
+  if (!lu.isInvertible()) return out;
+  const Eigen::MatrixXd cov = lu.inverse() * (r.ssr / static_cast<double>(r.residuals - p));
+  for (Eigen::Index u = 0; u < p; ++u)
+    if (cov(u, u) >= 0) out(idx[static_cast<std::size_t>(u)]) = std::sqrt(cov(u, u));
+  return out;
+}
+
 LmResult minimize(const LeastSquaresProblem& problem, const Eigen::VectorXd& x0,
                   const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
                   const LmOptions& opt) {
@@ -135,29 +158,12 @@ LmResult minimize(const LeastSquaresProblem& problem, const Eigen::VectorXd& x0,
   res.ssr = f;
   res.iterations = it;
   res.jtj = a;
-  free = free_set(x, g, lower, upper);
   res.at_bound.resize(static_cast<std::size_t>(n));
-  std::vector<Eigen::Index> idx;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const bool at = x(i) <= lower(i) || x(i) >= upper(i);
-    res.at_bound[static_cast<std::size_t>(i)] = at;
-    if (!at) idx.push_back(i);
-  }
-  res.standard_errors = Eigen::VectorXd::Constant(n, NAN);
-  const auto p = static_cast<Eigen::Index>(idx.size());
-  if (p > 0 && m > p) {
-    Eigen::MatrixXd af(p, p);
-    for (Eigen::Index u = 0; u < p; ++u)
-      for (Eigen::Index v = 0; v < p; ++v)
-        af(u, v) = a(idx[static_cast<std::size_t>(u)], idx[static_cast<std::size_t>(v)]);
-    Eigen::FullPivLU<Eigen::MatrixXd> lu(af);
-    if (lu.isInvertible()) {
-      const Eigen::MatrixXd cov = lu.inverse() * (f / static_cast<double>(m - p));
-      for (Eigen::Index u = 0; u < p; ++u)
-        if (cov(u, u) >= 0)
-          res.standard_errors(idx[static_cast<std::size_t>(u)]) = std::sqrt(cov(u, u));
-    }
-  }
+  for (Eigen::Index i = 0; i < n; ++i)
+    res.at_bound[static_cast<std::size_t>(i)] = x(i) <= lower(i) || x(i) >= upper(i);
+  res.residuals = m;
+  res.standard_errors =
+      standard_errors_holding(res, std::vector<bool>(static_cast<std::size_t>(n)));
   return res;
 }
 

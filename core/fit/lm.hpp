@@ -35,10 +35,17 @@ struct LmResult {
   bool converged = false;
   Eigen::MatrixXd jtj;         ///< J^T J at the solution
   std::vector<bool> at_bound;  ///< parameters held at a bound at the end
+  Eigen::Index residuals = 0;  ///< the problem's residual count
   /// Standard errors sqrt(diag(s^2 (J^T J)^-1)) over the free parameters, s^2 = ssr/(n - p);
   /// NaN for parameters at a bound or when J^T J is singular.
   Eigen::VectorXd standard_errors;
 };
+
+/// Standard errors as LmResult::standard_errors gives them but with the parameters marked in
+/// `held` also held (as if known), besides those at a bound. A parameter that shares its Jacobian
+/// column with a bounded nuisance term has no error of its own while both are free (the sum is
+/// determined, not the share): held, the nuisance's bound stands in for its uncertainty.
+Eigen::VectorXd standard_errors_holding(const LmResult& r, const std::vector<bool>& held);
 
 LmResult minimize(const LeastSquaresProblem& problem, const Eigen::VectorXd& x0,
                   const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,

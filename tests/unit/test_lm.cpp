@@ -22,6 +22,24 @@ class Linear final : public LeastSquaresProblem {
   }
 };
 
+/// The Linear problem with a second intercept x(2) on the same column as x(0) (only their sum is
+/// determined).
+class SharedIntercept final : public LeastSquaresProblem {
+ public:
+  Eigen::Index residual_count() const override { return 5; }
+  void evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* j) const override {
+    Linear().evaluate(x.head(2), r, nullptr);
+    r.array() += x(2);
+    if (j) {
+      Eigen::MatrixXd j2(5, 2);
+      Linear().evaluate(x.head(2), r, &j2);
+      r.array() += x(2);
+      j->leftCols(2) = j2;
+      j->col(2).setOnes();
+    }
+  }
+};
+
 }  // namespace
 
 TEST(Lm, SolvesLinearLeastSquares) {
@@ -46,6 +64,27 @@ TEST(Lm, RespectsBoundsAndMarksParameterAtBound) {
   EXPECT_TRUE(r.at_bound[1]);
   EXPECT_TRUE(std::isnan(r.standard_errors(1)));
   EXPECT_TRUE(std::isfinite(r.standard_errors(0)));
+}
+
+TEST(Lm, AParameterSharingAColumnHasAnErrorOnceTheOtherIsHeld) {
+  Eigen::VectorXd lo(3), hi(3), x0(3);
+  lo << -100, -100, -10;
+  hi << 100, 100, 10;  // a bounded nuisance on the intercept's column
+  x0 << 0, 0, 0;
+  const LmResult shared = minimize(SharedIntercept(), x0, lo, hi);
+  ASSERT_FALSE(shared.at_bound[2]);
+  // Both free: only the sum is determined, the intercept's own error is none or enormous.
+  EXPECT_FALSE(shared.standard_errors(0) < 1.0) << shared.standard_errors(0);
+  // The nuisance held: the intercept's error is the one-intercept problem's.
+  Eigen::VectorXd lo2(2), hi2(2), x02(2);
+  lo2 << -100, -100;
+  hi2 << 100, 100;
+  x02 << 0, 0;
+  const LmResult alone = minimize(Linear(), x02, lo2, hi2);
+  const Eigen::VectorXd held = standard_errors_holding(shared, {false, false, true});
+  EXPECT_NEAR(held(0), alone.standard_errors(0), 1e-6 * alone.standard_errors(0));
+  EXPECT_NEAR(held(1), alone.standard_errors(1), 1e-6 * alone.standard_errors(1));
+  EXPECT_TRUE(std::isnan(held(2)));
 }
 
 TEST(MfFit, RecoversNoiseFreeParametersTo1e6) {

@@ -193,6 +193,17 @@ TEST(SecondSim, ALagOnAQuantisedRollerIsNotLevelledAway) {
   }
 }
 
+TEST(SecondSim, ASlipOffsetBesideTheQuantisedReferencesBiasIsToldFromZero) {
+  // A 0.9 % offset on B's quantised roller: the reference's bias nuisance (at most half its step,
+  // 0.11 %) adds to the same slip, and with both free the offset read 0.0079 +- 32 and was refused
+  // as "cannot be told from zero", the set unexplained.
+  const sim::Injection inj{"slip_offset", 0.00909, gap::Condition::Roller, sim::Generator::B};
+  const auto t = sim::run_trial(inj, 57027, gap::calibrated_options(gap::Condition::Roller));
+  ASSERT_FALSE(t.verdict.empty());
+  EXPECT_EQ(t.verdict.front(), "slip_offset");
+  EXPECT_NEAR(t.estimate, 0.00909, 0.15 * 0.00909);
+}
+
 TEST(SecondSim, StrongEffectsOfTheSecondPhysicsAreNamed) {
   // Crossed as well: generator A's gates.
   for (const auto& [effect, magnitude, cond] :
