@@ -2,6 +2,7 @@
 // alone with B, C, D, E held), by the bounded Levenberg-Marquardt of core/fit.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/fit/lm.hpp"
 #include "core/gap/gap.hpp"
@@ -94,22 +95,23 @@ double quantisation_bias_bound(const std::vector<const Run*>& runs) {
 /// The fit's standard errors, but the slip offset's with the nuisance slip bias held: both add to
 /// the same slip, so while both are free only their sum has an error (a 0.8 % offset beside a
 /// quantised roller's bias of at most 0.1 % read +- 32). The bias is bounded to its half step, so
-/// held it does not hide an offset larger than that. `first` is the index of the effects' first
-/// parameter in the result.
+/// held it does not hide an offset larger than that. `head` is the number of curve parameters
+/// before the effects' in the result (4, or 0 where the curve was held).
 std::vector<double> gap_standard_errors(const fit::LmResult& r, const std::vector<Effect>& effects,
-                                        std::size_t first) {
+                                        std::size_t head) {
   std::vector<double> out(r.standard_errors.data(),
                           r.standard_errors.data() + r.standard_errors.size());
-  const bool nuisance = std::any_of(effects.begin(), effects.end(), is_nuisance);
-  const auto offset = std::find(effects.begin(), effects.end(), Effect::SlipOffset);
-  if (!nuisance || offset == effects.end()) return out;
+  const auto at = [&](Effect e) -> std::optional<std::size_t> {
+    const auto k = param_offset(effects, e);  // counts the 4 curve parameters
+    return k ? std::optional<std::size_t>(*k - 4 + head) : std::nullopt;
+  };
+  const auto offset = at(Effect::SlipOffset);
   std::vector<bool> held(out.size());
-  std::size_t at = first, offset_at = first;
-  for (auto e = effects.begin(); e != effects.end(); ++e) {
-    if (e == offset) offset_at = at;
-    for (std::size_t k = 0; k < effect_params(*e).size(); ++k) held.at(at++) = is_nuisance(*e);
-  }
-  out.at(offset_at) = fit::standard_errors_holding(r, held)(static_cast<Eigen::Index>(offset_at));
+  bool any_held = false;
+  for (const Effect e : effects)
+    if (is_nuisance(e)) held.at(*at(e)) = any_held = true;
+  if (!offset || !any_held) return out;
+  out.at(*offset) = fit::standard_errors_holding(r, held)(static_cast<Eigen::Index>(*offset));
   return out;
 }
 
