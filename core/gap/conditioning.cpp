@@ -4,7 +4,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <tuple>
 #include <utility>
 
 #include "core/curve.hpp"
@@ -275,9 +277,16 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
         }
         break;
       }
-  for (auto [v, cn] : {std::pair{&full.v_ref_mps, &ref_noise}, std::pair{&v_wheel, &wheel_noise}})
-    if (cn->step > 0 && !(v == &full.v_ref_mps && ref_smooth))
+  // A rebuilt channel is smooth between its transitions, so its error is not seen as noise: it is
+  // where each transition fell inside its sample interval, sd = |dv/dt| dt / sqrt(12) (at most
+  // the staircase's step / sqrt(12)), carried into the slip's sd below.
+  std::array<std::vector<double>, 2> rebuild_sd_mps;  // reference, wheel
+  for (auto [v, cn, sd] : {std::tuple{&full.v_ref_mps, &ref_noise, &rebuild_sd_mps[0]},
+                           std::tuple{&v_wheel, &wheel_noise, &rebuild_sd_mps[1]}})
+    if (cn->step > 0 && !(v == &full.v_ref_mps && ref_smooth)) {
       *v = dequantise(full.t_s, *v, cn->step);
+      *sd = rebuilt_timing_sd(full.t_s, *v, cn->step);
+    }
   // A fifth wheel's ripple is read from its own speed (the vehicle slows smoothly), not from the
   // force residual, where it took part of an effect's bend (reference_ripple.cpp).
   if (c.bench == can::BenchKind::Ground)
@@ -335,7 +344,10 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   const std::vector<double> v_ref_raw = std::exchange(full.v_ref_mps, vr);
   for (std::size_t i = 0; i < vr.size(); ++i) {
     full.slip.push_back(std::clamp(1.0 - vw[i] / vr[i], -1.0, 1.0));  // below 0: a slip offset
-    full.slip_sd.push_back(slip_sd);
+    // slip = 1 - vw / vr: d slip = -d vw / vr + vw d vr / vr^2
+    const double ref_part = rebuild_sd_mps[0].empty() ? 0 : vw[i] * rebuild_sd_mps[0][i] / vr[i];
+    const double wheel_part = rebuild_sd_mps[1].empty() ? 0 : rebuild_sd_mps[1][i];
+    full.slip_sd.push_back(std::hypot(slip_sd, std::hypot(ref_part, wheel_part) / vr[i]));
   }
   // Derivatives take their time from the sampler's clock (above), not from each stamp: two
   // samples that share a stamp are spread half a step apart, and a central difference over

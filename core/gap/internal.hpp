@@ -105,10 +105,15 @@ struct ChannelNoise {
 };
 ChannelNoise channel_noise(const std::vector<double>& x);
 /// A quantised channel rebuilt from its transitions: where the level steps between two samples
-/// the signal crossed the middle of the two levels half-way in time; linear between those points,
-/// extrapolated beyond them, and never more than half a step from the level read.
+/// the signal crossed the middle of the two levels half-way in time; a monotone cubic through those
+/// points (each one's slope the parabola's through it and its neighbours), linear beyond them,
+/// and never more than half a step from the level read.
 std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
                                double step);
+/// The error a rebuilt channel y keeps from where each transition fell inside its sample
+/// interval: |dy/dt| dt / sqrt(12), at most step / sqrt(12), per sample.
+std::vector<double> rebuilt_timing_sd(const std::vector<double>& t, const std::vector<double>& y,
+                                      double step);
 /// A roller held at speed and read through a quantised channel whose levels its encoder's ripple
 /// dithers: the smooth speed under the ripple (a quadratic trend fitted with the ripple's two
 /// first harmonics to the staircase). Empty when the run is too short to tell them apart.

@@ -13,6 +13,42 @@ namespace brakefit::gap {
 /// Samples an excursion into a level must last to be shaped as a peak (see dequantise).
 constexpr std::size_t kMinExcursionSamples = 4;
 
+namespace {
+
+/// Each anchor's slope: the derivative of the parabola through it and its neighbours, limited
+/// so the curve never overshoots the anchors (Steffen 1990: flat at a turn, at most twice
+/// either secant). The ends take their one secant.
+std::vector<double> anchor_slopes(const std::vector<double>& at, const std::vector<double>& val) {
+  const std::size_t n = at.size();
+  std::vector<double> secant(n - 1), slope(n);
+  for (std::size_t k = 0; k + 1 < n; ++k)
+    secant[k] = (val[k + 1] - val[k]) / std::max(at[k + 1] - at[k], 1e-9);
+  slope.front() = secant.front();
+  slope.back() = secant.back();
+  for (std::size_t k = 1; k + 1 < n; ++k) {
+    const double a = secant[k - 1], b = secant[k];
+    if (a * b <= 0) {
+      slope[k] = 0;
+      continue;
+    }
+    const double h0 = at[k] - at[k - 1], h1 = at[k + 1] - at[k];
+    const double p = (a * h1 + b * h0) / std::max(h0 + h1, 1e-9);
+    slope[k] = std::copysign(std::min({std::abs(p), 2 * std::abs(a), 2 * std::abs(b)}), a);
+  }
+  return slope;
+}
+
+/// The cubic through anchors k and k+1 with their slopes, at time t.
+double hermite(const std::vector<double>& at, const std::vector<double>& val,
+               const std::vector<double>& slope, std::size_t k, double t) {
+  const double h = std::max(at[k + 1] - at[k], 1e-9), u = (t - at[k]) / h;
+  const double u2 = u * u, u3 = u2 * u;
+  return (2 * u3 - 3 * u2 + 1) * val[k] + (u3 - 2 * u2 + u) * h * slope[k] +
+         (3 * u2 - 2 * u3) * val[k + 1] + (u3 - u2) * h * slope[k + 1];
+}
+
+}  // namespace
+
 std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
                                double step) {
   // Anchors: where the level changes between samples i-1 and i, the signal crossed the middle of
@@ -29,15 +65,19 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
   const std::size_t n = at.size();
   const double slope0 = (val[1] - val[0]) / std::max(at[1] - at[0], 1e-9);
   const double slope1 = (val[n - 1] - val[n - 2]) / std::max(at[n - 1] - at[n - 2], 1e-9);
+  const std::vector<double> slope = anchor_slopes(at, val);
   std::vector<double> y(x.size());
+  std::size_t seg = 0;  // the anchors' interval holding t[i] (the stamps rise)
   for (std::size_t i = 0; i < x.size(); ++i) {
     double v = 0;
-    if (t[i] <= at.front())
+    if (t[i] <= at.front()) {
       v = val.front() + slope0 * (t[i] - at.front());  // extrapolated along the first anchors
-    else if (t[i] >= at.back())
+    } else if (t[i] >= at.back()) {
       v = val.back() + slope1 * (t[i] - at.back());
-    else
-      v = interp(at, val, t[i]);
+    } else {
+      while (seg + 2 < n && at[seg + 1] < t[i]) ++seg;
+      v = hermite(at, val, slope, seg, t[i]);
+    }
     // The signal lies within half a step of the level it was quantised to.
     y[i] = std::clamp(v, x[i] - 0.5 * step, x[i] + 0.5 * step);
   }
@@ -57,6 +97,16 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
     }
   }
   return y;
+}
+
+std::vector<double> rebuilt_timing_sd(const std::vector<double>& t, const std::vector<double>& y,
+                                      double step) {
+  std::vector<double> sd = derivative(t, y);
+  std::vector<double> dts;
+  for (std::size_t i = 1; i < t.size(); ++i) dts.push_back(t[i] - t[i - 1]);
+  const double dt = dts.empty() ? 0 : upper_median(dts);
+  for (double& d : sd) d = std::min(std::abs(d) * dt, step) / std::sqrt(12.0);
+  return sd;
 }
 
 ChannelNoise channel_noise(const std::vector<double>& x) {
