@@ -256,7 +256,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     }
   }
   // A roller whose drive droops by many steps: the droop fitted to the transitions, where it is
-  // the roller's (the channel's own rebuilding is piecewise linear between transitions, half a
+  // the roller's (the channel's own rebuilding is pinned only at its transitions, up to half a
   // step off between them: 2e-4 of slip at 1.6 m/s).
   if (c.bench == can::BenchKind::Roller && !ref_smooth && ref_noise.step > 0)
     if (auto droop = drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n,
