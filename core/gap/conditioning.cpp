@@ -84,10 +84,7 @@ constexpr int kMinSmoothHalfWindow = 2;
 /// The half window (samples) for a run sampled at t_s: at most `samples`, at most
 /// kMaxSmoothHalfWindowS at the run's median sample interval.
 static int smoothing_half_window(const std::vector<double>& t_s, int samples) {
-  std::vector<double> dt;
-  for (std::size_t i = 1; i < t_s.size(); ++i) dt.push_back(t_s[i] - t_s[i - 1]);
-  if (dt.empty()) return samples;
-  const double interval_s = upper_median(dt);
+  const double interval_s = median_interval_s(t_s);
   if (!(interval_s > 0)) return samples;
   const int in_time = static_cast<int>(std::lround(kMaxSmoothHalfWindowS / interval_s));
   return std::clamp(in_time, std::min(kMinSmoothHalfWindow, samples), samples);
@@ -314,9 +311,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   // pressure is sampled at the stamp. The speeds are moved forward by half the median interval.
   // (Speeds taken at the stamp, speed_timing = "instant", are not moved.)
   if (c.speed_timing == "frame_mean") {
-    std::vector<double> dts;
-    for (std::size_t i = 1; i < full.t_s.size(); ++i) dts.push_back(full.t_s[i] - full.t_s[i - 1]);
-    const double half = 0.5 * upper_median(dts);
+    const double half = 0.5 * median_interval_s(full.t_s);
     auto align = [&](std::vector<double>& v) {
       std::vector<double> a(v.size());
       for (std::size_t i = 0; i + 1 < v.size(); ++i) a[i] = interp(full.t_s, v, full.t_s[i] + half);

@@ -74,6 +74,8 @@ std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_
 /// stamps, or not one regular clock.
 std::optional<SamplerInterval> sampler_interval(const std::vector<double>& stamps_s,
                                                 int half_window);
+/// The median of the intervals between successive times (0 for fewer than two).
+double median_interval_s(const std::vector<double>& t_s);
 /// Central differences (one-sided at the ends).
 std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x);
 /// Linear interpolation of x(t) at `at`, held at the ends.

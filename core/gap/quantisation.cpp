@@ -63,17 +63,16 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
     }
   if (at.size() < 2) return x;
   const std::size_t n = at.size();
-  const double slope0 = (val[1] - val[0]) / std::max(at[1] - at[0], 1e-9);
-  const double slope1 = (val[n - 1] - val[n - 2]) / std::max(at[n - 1] - at[n - 2], 1e-9);
   const std::vector<double> slope = anchor_slopes(at, val);
   std::vector<double> y(x.size());
   std::size_t seg = 0;  // the anchors' interval holding t[i] (the stamps rise)
   for (std::size_t i = 0; i < x.size(); ++i) {
     double v = 0;
     if (t[i] <= at.front()) {
-      v = val.front() + slope0 * (t[i] - at.front());  // extrapolated along the first anchors
+      v = val.front() +
+          slope.front() * (t[i] - at.front());  // extrapolated along the first anchors
     } else if (t[i] >= at.back()) {
-      v = val.back() + slope1 * (t[i] - at.back());
+      v = val.back() + slope.back() * (t[i] - at.back());
     } else {
       while (seg + 2 < n && at[seg + 1] < t[i]) ++seg;
       v = hermite(at, val, slope, seg, t[i]);
@@ -102,9 +101,7 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
 std::vector<double> rebuilt_timing_sd(const std::vector<double>& t, const std::vector<double>& y,
                                       double step) {
   std::vector<double> sd = derivative(t, y);
-  std::vector<double> dts;
-  for (std::size_t i = 1; i < t.size(); ++i) dts.push_back(t[i] - t[i - 1]);
-  const double dt = dts.empty() ? 0 : upper_median(dts);
+  const double dt = median_interval_s(t);
   for (double& d : sd) d = std::min(std::abs(d) * dt, step) / std::sqrt(12.0);
   return sd;
 }

@@ -161,6 +161,12 @@ std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_
   return line;
 }
 
+double median_interval_s(const std::vector<double>& t_s) {
+  std::vector<double> dt;
+  for (std::size_t i = 1; i < t_s.size(); ++i) dt.push_back(t_s[i] - t_s[i - 1]);
+  return dt.empty() ? 0.0 : upper_median(dt);
+}
+
 std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x) {
   std::vector<double> d(x.size(), 0.0);
   for (std::size_t i = 0; i < x.size(); ++i) {
