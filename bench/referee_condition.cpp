@@ -91,11 +91,13 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   draws.reserve(static_cast<std::size_t>(std::max(0, trials)));
   for (int t = 0; t < trials; ++t)
     draws.push_back(sim::draw_injection(rng, st.null_share, c, trial_gen));
-  // --only: the same draws and seeds as the whole run, the other effects' trials left out.
+  // --only, --pick: the same draws and seeds as the whole run, the other trials left out.
   std::vector<int> kept;
   for (int t = 0; t < trials; ++t)
-    if (st.only.empty() || std::find(st.only.begin(), st.only.end(),
-                                     draws[static_cast<std::size_t>(t)].effect) != st.only.end())
+    if ((st.only.empty() ||
+         std::find(st.only.begin(), st.only.end(), draws[static_cast<std::size_t>(t)].effect) !=
+             st.only.end()) &&
+        (st.pick.empty() || std::find(st.pick.begin(), st.pick.end(), t) != st.pick.end()))
       kept.push_back(t);
   const auto results = parallel_map<sim::TrialResult>(
       static_cast<int>(kept.size()), st.threads,

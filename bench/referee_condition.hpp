@@ -20,7 +20,7 @@ struct Settings {
   double null_share = 0.3;
   std::uint64_t seed = 1;
   std::vector<std::string> only;  ///< --only: run just the trials drawing these effects
-  std::vector<int> pick;          ///< --pick: just these pair trials, by the index a miss names
+  std::vector<int> pick;  ///< --pick: just these trials and pair trials, by the index a miss names
   int why = 0;  ///< --why 1: each miss's diagnosis notes on stderr; 2: also each hit, one line
 };
 
