@@ -68,9 +68,8 @@ std::vector<double> dequantise(const std::vector<double>& t, const std::vector<d
   std::size_t seg = 0;  // the anchors' interval holding t[i] (the stamps rise)
   for (std::size_t i = 0; i < x.size(); ++i) {
     double v = 0;
-    if (t[i] <= at.front()) {
-      v = val.front() +
-          slope.front() * (t[i] - at.front());  // extrapolated along the first anchors
+    if (t[i] <= at.front()) {  // outside the anchors: along the end anchors' slopes
+      v = val.front() + slope.front() * (t[i] - at.front());
     } else if (t[i] >= at.back()) {
       v = val.back() + slope.back() * (t[i] - at.back());
     } else {
