@@ -1,3 +1,4 @@
+#include <fmt/format.h>
 // The two-roller cradle's force cap, found from how the runs end (a light wheel runs away at the
 // cap while its force still rises with slip).
 #include <algorithm>
@@ -56,7 +57,7 @@ std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs) {
   e.cap_n = sum / static_cast<double>(runs.size());
   e.spread = (hi - lo) / e.cap_n;
   e.end_slope_ratio = ratio;
-  if (e.spread > 0.03 || e.end_slope_ratio < kCapMinEndSlopeRatio) return std::nullopt;
+  if (e.spread > kCapMaxSpread || e.end_slope_ratio < kCapMinEndSlopeRatio) return std::nullopt;
   return e;
 }
 
@@ -74,6 +75,51 @@ double cap_kink_ratio(const std::vector<Run>& runs, double cap_n) {
     ratio = std::min(ratio, end / initial);
   }
   return runs.empty() ? NAN : ratio;
+}
+
+/// Least-squares rate of a run's force (N/s) over its last kEndRateS (at least three samples).
+static double end_force_rate_n_per_s(const Run& r) {
+  constexpr double kEndRateS = 0.05;
+  double st = 0, sf = 0, stt = 0, stf = 0, m = 0;
+  for (std::size_t k = r.t_s.size(); k-- > 0;) {
+    if (m >= 3 && r.t_s.back() - r.t_s[k] > kEndRateS) break;
+    const double t = r.t_s[k] - r.t_s.back();
+    st += t;
+    sf += r.force_n[k];
+    stt += t * t;
+    stf += t * r.force_n[k];
+    ++m;
+  }
+  const double den = m * stt - st * st;
+  return m >= 3 && den > 0 ? (m * stf - st * sf) / den : NAN;
+}
+
+std::optional<CapEvidence> cap_behind_lag(const Report& rep, const std::vector<Run>& runs) {
+  if (runs.size() < 2 || std::isfinite(rep.cap_n)) return std::nullopt;
+  const bool relaxation = std::find(rep.accepted.begin(), rep.accepted.end(),
+                                    Effect::RelaxationLength) != rep.accepted.end();
+  const auto dt_at = param_offset(rep.accepted, Effect::TimeOffset);
+  if (!relaxation && !dt_at) return std::nullopt;
+  // A channel dt late reads the force the tyre had dt before: each run's runaway at
+  // F + dt dF/dt (a fast ramp's runaway reads lower than a slow one's).
+  const double dt_s = dt_at ? rep.after.params.at(*dt_at) : 0.0;
+  double lo = INFINITY, hi = 0, sum = 0;
+  for (const Run& r : runs) {
+    if (r.bench != can::BenchKind::Roller || !r.runaway) return std::nullopt;
+    const double rate = dt_s != 0 ? end_force_rate_n_per_s(r) : 0.0;
+    if (!std::isfinite(rate)) return std::nullopt;
+    const double f = r.runaway_force_n + dt_s * rate;
+    lo = std::min(lo, f);
+    hi = std::max(hi, f);
+    sum += f;
+  }
+  CapEvidence e;
+  e.cap_n = sum / static_cast<double>(runs.size());
+  e.spread = (hi - lo) / e.cap_n;
+  e.end_slope_ratio = NAN;  // the lag bends the force's end over slip: not read
+  e.fitted_peak_ratio = rep.after.params.at(2) / e.cap_n;
+  if (!(e.spread <= kCapMaxSpread) || !(e.fitted_peak_ratio > kCapAtPeakRatio)) return std::nullopt;
+  return e;
 }
 
 /// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole

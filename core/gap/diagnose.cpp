@@ -64,18 +64,15 @@ std::string short_runs_note(const std::vector<Run>& runs) {
       n_short, runs.size(), kShortRunSamples, fewest, 1e3 * widest_s);
 }
 
-}  // namespace
-
-Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Options& o) {
-  if (runs_in.size() < 2)
-    throw InputError(
-        "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
-        "to)");
+/// The diagnosis; behind_lag: a cap seen behind a lag (cap_behind_lag), each run cut below its
+/// own runaway.
+Report diagnose_runs(const std::vector<Run>& runs_in, const MfParams& start, const Options& o,
+                     const std::optional<CapEvidence>& behind_lag) {
   // A force cap (a two-roller cradle): the runs end in a runaway at the cap; the samples from 98 %
   // of the cap on are that runaway, not the tyre, and are left out.
-  auto cap = cradle_cap_evidence(runs_in);
+  auto cap = behind_lag ? behind_lag : cradle_cap_evidence(runs_in);
   std::string cap_at_peak;
-  if (cap && cap_at_fitted_peak(*cap, runs_in, start)) {
+  if (cap && !behind_lag && cap_at_fitted_peak(*cap, runs_in, start)) {
     cap_at_peak = fmt::format(
         "every run ran away at {:.0f} N (spread {:.1f} %) with its force still rising ({:.0f} % of "
         "the initial slope), as at a cradle's cap, but a Magic Formula fitted to the whole runs "
@@ -88,7 +85,8 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   const bool declared_load = o.declared_load_per_decel_s2_per_m != 0;
   std::vector<Run> runs;
   for (const Run& r : runs_in) {
-    Run cut = cap ? up_to(r, r.force_n, 0.98 * cap->cap_n) : r;
+    // Behind a lag each run reads the cap at its own runaway force.
+    Run cut = cap ? up_to(r, r.force_n, 0.98 * (behind_lag ? r.runaway_force_n : cap->cap_n)) : r;
     if (declared_load) {
       cut.declared_load_per_decel_s2_per_m = o.declared_load_per_decel_s2_per_m;
       cut.declared_kx_load_ratio = o.declared_kx_load_ratio;
@@ -212,12 +210,21 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
     // Found from how the runs end, not fitted: before, the baseline on the whole runs (the
     // runaway at the cap included); after, the baseline on the runs below the cap.
     put_cap_first(rep, cap->cap_n, heldout(runs_in, rep.baseline_effects, fit));
-    rep.notes.push_back(fmt::format(
-        "every run ran away at {:.0f} N (spread {:.1f} %) while its force was still rising with "
-        "slip ({:.0f} % of the initial slope): the force was capped before the tyre's peak (a "
-        "two-roller cradle caps it at Fz sin beta); the samples from 98 % of the cap on (the "
-        "runaway) are left out, and B, C, D, E describe the curve only up to that force",
-        cap->cap_n, 100 * cap->spread, 100 * cap->end_slope_ratio));
+    if (behind_lag)
+      rep.notes.push_back(fmt::format(
+          "every run ran away at {:.0f} N (spread {:.1f} %) once read behind the named lag, below "
+          "the peak of the curve fitted with it ({:.3f}x that force): the force was capped before "
+          "the tyre's peak (a two-roller cradle caps it at Fz sin beta); the samples from 98 % of "
+          "each run's runaway force on are left out, and B, C, D, E describe the curve only up to "
+          "the cap",
+          cap->cap_n, 100 * cap->spread, cap->fitted_peak_ratio));
+    else
+      rep.notes.push_back(fmt::format(
+          "every run ran away at {:.0f} N (spread {:.1f} %) while its force was still rising with "
+          "slip ({:.0f} % of the initial slope): the force was capped before the tyre's peak (a "
+          "two-roller cradle caps it at Fz sin beta); the samples from 98 % of the cap on (the "
+          "runaway) are left out, and B, C, D, E describe the curve only up to that force",
+          cap->cap_n, 100 * cap->spread, 100 * cap->end_slope_ratio));
   } else if (const auto at = param_offset(rep.accepted, Effect::CradleCap)) {
     rep.cap_n = rep.after.params[*at];
   }
@@ -233,6 +240,26 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   if (!cap && std::any_of(rep.accepted.begin(), rep.accepted.end(),
                           [](Effect e) { return !is_nuisance(e); }))
     rep.after_spread = fold_spread(runs, rep.accepted, fit);
+  return rep;
+}
+
+}  // namespace
+
+Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Options& o) {
+  if (runs_in.size() < 2)
+    throw InputError(
+        "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
+        "to)");
+  Report rep = diagnose_runs(runs_in, start, o, std::nullopt);
+  // A lag moves where each run reads its runaway, and bends the force's end over slip: a cap is
+  // looked for again behind the lag named, and kept where the runs below it name that lag too.
+  if (const auto cap = cap_behind_lag(rep, runs_in)) {
+    Report capped = diagnose_runs(runs_in, start, o, cap);
+    if (std::any_of(capped.accepted.begin(), capped.accepted.end(), [](Effect e) {
+          return e == Effect::TimeOffset || e == Effect::RelaxationLength;
+        }))
+      return capped;
+  }
   return rep;
 }
 
