@@ -251,10 +251,9 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
         "to)");
   Report rep = diagnose_runs(runs_in, start, o, std::nullopt);
-  // A lag moves where each run reads its runaway, and bends the force's end over slip: a cap is
-  // looked for again behind the lag named, and kept where the runs below it name that lag too and
-  // leave nothing unexplained. (A long relaxation on a fast ramp runs away below its steady peak,
-  // at one force in every run, as at a cap; below those runaways the lag leaves a gap.)
+  // A late channel moves where each run reads its runaway: a cap is looked for again behind the
+  // time offset named, and kept where the runs below it name the offset too and leave nothing
+  // unexplained.
   if (const auto cap = cap_behind_lag(rep, runs_in)) {
     Report capped = diagnose_runs(runs_in, start, o, cap);
     const auto& v = capped.verdict;

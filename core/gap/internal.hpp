@@ -253,10 +253,9 @@ std::vector<double> pitch_lagged_decel(const Run& r, double lag_s, double mode_s
 inline constexpr double kCapKinkFrom = 0.85, kCapKinkTo = 0.98, kCapMinEndSlopeRatio = 0.3;
 /// The runs' runaway forces agree within this share of their mean at a cap.
 inline constexpr double kCapMaxSpread = 0.03;
-/// A cap behind a lag (rep names a time offset or a relaxation, and no cap): the runs ran away at
-/// one force once each is read dt earlier (a late channel reads a fast ramp's runaway lower), and
-/// the curve fitted with the lag peaks above it (kCapAtPeakRatio). Where the lag bends the force's
-/// end over slip, or the plain baseline peaks at the runaway, the cap is seen only this way.
+/// A cap behind a late channel (rep names a time offset, and no cap): the runs ran away at one
+/// force once each is read dt earlier (a late channel reads a fast ramp's runaway lower), and the
+/// curve fitted with the offset peaks above it (kCapAtPeakRatio).
 std::optional<CapEvidence> cap_behind_lag(const Report& rep, const std::vector<Run>& runs);
 /// The smallest over the runs of that slope ratio at cap_n (NaN where a run has too few points
 /// in either band to say).
