@@ -1,4 +1,3 @@
-#include <fmt/format.h>
 // The two-roller cradle's force cap, found from how the runs end (a light wheel runs away at the
 // cap while its force still rises with slip).
 #include <algorithm>

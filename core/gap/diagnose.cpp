@@ -257,9 +257,8 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
   if (const auto cap = cap_behind_lag(rep, runs_in)) {
     Report capped = diagnose_runs(runs_in, start, o, cap);
     const auto& v = capped.verdict;
-    if (std::any_of(
-            capped.accepted.begin(), capped.accepted.end(),
-            [](Effect e) { return e == Effect::TimeOffset || e == Effect::RelaxationLength; }) &&
+    if (std::find(capped.accepted.begin(), capped.accepted.end(), Effect::TimeOffset) !=
+            capped.accepted.end() &&
         std::find(v.begin(), v.end(), "unexplained") == v.end())
       return capped;
   }
