@@ -58,19 +58,6 @@ double dead_zone_slip_ratio(const std::vector<Run>& runs, double p0_bar, double 
   return points >= kMinPoints && expected > 0 ? excess / expected : NAN;
 }
 
-/// The fastest run's median reference speed over the slowest's.
-double roller_speed_spread(const std::vector<Run>& runs) {
-  double lo = INFINITY, hi = 0;
-  for (const Run& r : runs) {
-    if (r.v_ref_mps.empty()) continue;
-    std::vector<double> v = r.v_ref_mps;
-    const double mid = upper_median(v);
-    lo = std::min(lo, mid);
-    hi = std::max(hi, mid);
-  }
-  return hi > 0 && lo > 0 ? hi / lo : 1.0;
-}
-
 }  // namespace
 
 RestSlip pooled_rest_slip(const std::vector<Run>& runs) {
@@ -230,7 +217,7 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
         "the wheel did not roll free below the threshold"};
   }
   if (e.effect == Effect::SpeedFriction && roller) {
-    const double spread = roller_speed_spread(runs);
+    const double spread = run_speed_spread(runs);
     if (spread >= kSpeedFrictionMinSpeedSpread) return std::nullopt;
     return MissingEvidence{
         fmt::format("speed friction (lambda_mu_v {:.3g}) fits{{}} (held-out gain {:.3f}) but the "
@@ -269,6 +256,18 @@ std::string tyre_shift_contradicted(const std::vector<Run>& runs, double shift_r
       "read a slip of {:.2g} +- {:.1g} ({} samples at rest): not the tyre's own shift (its "
       "free-rolling wheel rests at its foot), force the channel reads without slip",
       shift_ratio, rest.mean, rest.uncertainty, rest.points);
+}
+
+double run_speed_spread(const std::vector<Run>& runs) {
+  double lo = INFINITY, hi = 0;
+  for (const Run& r : runs) {
+    if (r.v_ref_mps.empty()) continue;
+    std::vector<double> v = r.v_ref_mps;
+    const double mid = upper_median(v);
+    lo = std::min(lo, mid);
+    hi = std::max(hi, mid);
+  }
+  return hi > 0 && lo > 0 ? hi / lo : 1.0;
 }
 
 }  // namespace brakefit::gap

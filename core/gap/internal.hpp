@@ -314,6 +314,8 @@ inline constexpr double kThresholdMinRestForceShare = 0.5;
 /// A threshold that lets the wheel lock leaves the tyre its peak: the measured peak less the
 /// threshold's force (B's largest, 30 bar against a 45-75 bar lock, leaves it a third).
 inline constexpr double kThresholdMinCurveShare = 0.25;
+/// The fastest run's median reference speed over the slowest's (1 without speeds).
+double run_speed_spread(const std::vector<Run>& runs);
 /// `e` the candidate, the last effect of `model`, fitted as `f`.
 std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
                                                 const std::vector<Effect>& model, const Fit& f,
@@ -410,6 +412,24 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
                                       const std::vector<EffectScore>& round1, double gap_before_n,
                                       double left_n, const Fit& base_fit, const Fitter& fit,
                                       const Options& o);
+
+/// A relaxation length or time offset named beside later effects, replaced by its twin
+/// (lag_swap.cpp).
+struct LagSwap {
+  Effect replaced = Effect::TimeOffset;
+  std::vector<Effect> model;  ///< the chosen model with the twin in the replaced one's place
+  Fit fit;
+  double heldout_n = 0.0;
+  EffectScore score;  ///< the twin's, accepted
+  std::string note;
+};
+/// Where two or more effects are named, one of them a relaxation length or a time offset, and
+/// the runs' speeds are kSpeedFrictionMinSpeedSpread apart or more: the model with its twin in
+/// its place, when that leaves less held out, every named effect stays inside its range and the
+/// twin has the evidence only it leaves.
+std::optional<LagSwap> swap_lag_twin(const std::vector<Run>& runs,
+                                     const std::vector<Effect>& chosen, double current_heldout_n,
+                                     double gap_before_n, const Fit& base_fit, const Fitter& fit);
 
 /// Each accepted effect's parameters become the final model's (rep.after): an effect named in
 /// round 1 is re-estimated beside those named after it, so a pair's magnitudes are the joint

@@ -324,6 +324,21 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       all = pointers(runs);
     }
   };
+  // Lag or delay chosen again beside the effects named after it (lag_swap.cpp).
+  if (auto s =
+          swap_lag_twin(runs, chosen, current_heldout, rep.gap_before_rmse_n, rep.before, fit)) {
+    for (auto& e : rep.effects)
+      if (e.accepted && e.effect == s->replaced) {
+        e.accepted = false;
+        e.decision = fmt::format("replaced by {} (see the notes)", to_string(s->score.effect));
+      }
+    s->score.round = static_cast<int>(o.max_effects);
+    rep.effects.push_back(s->score);
+    rep.notes.push_back(std::move(s->note));
+    chosen = std::move(s->model);
+    current_fit = std::move(s->fit);
+    current_heldout = s->heldout_n;
+  }
   // Two effects that neither explains alone (their bends partly cancel): the leading candidates
   // in pairs, when a structured gap is left and at most two were named. With two named, the
   // first can have taken part of its partner's bend and the second another effect's place (a
