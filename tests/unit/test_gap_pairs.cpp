@@ -253,3 +253,23 @@ TEST(GapPairs, ACradleCapBehindALateChannelIsNamedWithIt) {
   ASSERT_EQ(inj.effect2, "time_offset");
   EXPECT_EQ(std::count(res.verdict.begin(), res.verdict.end(), "cradle_cap"), 0) << why;
 }
+
+TEST(GapPairs, ALagNamedBeforeItsPartnerIsChosenAgainBesideIt) {
+  // The referee's ground pair 2 (generator B, seed 1): a 6.8 ms late channel with load transfer.
+  // In round 1 load transfer ends on its range's bound, and a relaxation length takes the lag's
+  // place first; load transfer is named after it and the set said `relaxation_length,
+  // load_transfer, unexplained` (this test fails so). With load transfer in the model the time
+  // offset in the relaxation's place leaves about half as much held out; the runs' speeds, 2.4x
+  // apart, tell the two apart.
+  const auto [inj, res, why] = referee_pair(gap::Condition::Ground, sim::Generator::B, 2);
+  ASSERT_EQ(inj.effect, "load_transfer");
+  ASSERT_EQ(inj.effect2, "time_offset");
+  EXPECT_TRUE(res.correct()) << ::testing::PrintToString(res.verdict) << why;
+  EXPECT_EQ(std::count(res.verdict.begin(), res.verdict.end(), "relaxation_length"), 0) << why;
+  // The generator sets the truth in the diagnosis's units (load transfer per m/s^2).
+  EXPECT_NEAR(res.estimate, res.truth.magnitude, 0.15 * res.truth.magnitude) << why;
+  EXPECT_NEAR(res.estimate2, res.truth.magnitude2, 0.15 * res.truth.magnitude2) << why;
+  EXPECT_TRUE(std::any_of(res.notes.begin(), res.notes.end(), [](const std::string& n) {
+    return n.find("is named instead") != std::string::npos;
+  })) << why;
+}
