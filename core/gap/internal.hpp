@@ -392,6 +392,11 @@ bool at_bound(double v, const EffectParam& p);
 /// its index among effect_params(e) (none: all inside, or e not in the model).
 std::optional<std::size_t> param_at_bound(const std::vector<Effect>& model, Effect e, const Fit& f);
 
+/// A fit's RMS residual over every point it was fitted to (in-sample).
+inline double in_sample_rms(const Fit& f) {
+  return std::sqrt(f.ssr / static_cast<double>(std::max<std::size_t>(f.points, 1)));
+}
+
 /// Two effects named together that neither explains alone (pair_search.cpp).
 struct PairFound {
   std::vector<Effect> model;  ///< the baseline's terms and the two
@@ -401,17 +406,21 @@ struct PairFound {
   double delta_bic = 0.0;                       ///< against the baseline
   double gain_over_a = 0.0, gain_over_b = 0.0;  ///< the pair against b alone, against a alone
   EffectScore a, b;                             ///< the members, at the pair fit's values
+  double in_sample_n = 0.0;                     ///< the pair's RMS residual on all runs
+  bool in_sample = false;  ///< judged in-sample (a load-transfer pair): gains are in-sample
 };
 /// When forward selection leaves a structured gap (left_n): every pair of round 1's candidates,
 /// lag and delay never together, fitted jointly. Of those with both members inside their
 /// ranges, the best held out that passes is returned: it explains at least min_first_gain of
 /// the baseline's gap, beats what is left by the gain gate, drops the BIC by twice the margin,
 /// each member gains the gain gate over the other alone, and each has the evidence only it
-/// leaves.
+/// leaves. Where none passes, pairs with load transfer are judged the same way in-sample
+/// (left_in_sample_n: what forward selection left on all runs), when the pair leaves no more than
+/// the fit-quality factor x the floor (noise_n) in-sample.
 std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::vector<Effect>& base,
                                       const std::vector<EffectScore>& round1, double gap_before_n,
                                       double left_n, const Fit& base_fit, const Fitter& fit,
-                                      const Options& o);
+                                      double noise_n, double left_in_sample_n, const Options& o);
 
 /// A relaxation length or time offset named beside later effects, replaced by its twin
 /// (lag_swap.cpp).

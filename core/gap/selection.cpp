@@ -348,7 +348,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   if (named(chosen).size() <= 2 && current_heldout > o.noise_factor * rep.noise_n) {
     std::vector<Run>& entry = entry_runs ? *entry_runs : runs;  // the runs round 1 scored
     if (auto p = search_pairs(entry, base, rep.effects, rep.gap_before_rmse_n, current_heldout,
-                              rep.before, fit, o)) {
+                              rep.before, fit, rep.noise_n, in_sample_rms(current_fit), o)) {
       const std::string before_names = after_names();
       for (auto& e : rep.effects)
         if (e.accepted) {
@@ -368,9 +368,15 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       }
       rep.notes.push_back(fmt::format(
           "forward selection left {:.1f} N of structured gap ({}); {} and {} fitted together "
-          "leave {:.1f} N held out ({:.0f} % of the gap explained): {}; both are named",
+          "leave {:.1f} N {} ({:.0f} % of the gap explained{}): {}; both are named",
           current_heldout, before_names.empty() ? "nothing named" : before_names + " named",
-          to_string(p->a.effect), to_string(p->b.effect), p->heldout_n, 100 * p->gain,
+          to_string(p->a.effect), to_string(p->b.effect),
+          p->in_sample ? p->in_sample_n : p->heldout_n, p->in_sample ? "in-sample" : "held out",
+          100 * p->gain,
+          p->in_sample ? fmt::format(", in-sample: with one run left out load transfer's fold "
+                                     "trades the tyre's shape for the load, {:.1f} N held out",
+                                     p->heldout_n)
+                       : std::string(),
           before_names.empty()
               ? "each alone bends the curve against the other, so neither passed by itself"
               : "one effect at a time, the first took part of its partner's bend"));
@@ -417,11 +423,8 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   // left out, a run's load and its peak trade (the deceleration follows this wheel's force), so
   // the fastest run predicted from slower ones is off by more than the effect leaves (gap.md §9).
   // Its gain, the bite it takes, stays held out.
-  auto in_sample_n = [](const Fit& f) {
-    return std::sqrt(f.ssr / static_cast<double>(std::max<std::size_t>(f.points, 1)));
-  };
-  const double judged_before_n = law_in_part ? in_sample_n(rep.before) : rep.gap_before_rmse_n;
-  const double judged_after_n = law_in_part ? in_sample_n(current_fit) : current_heldout;
+  const double judged_before_n = law_in_part ? in_sample_rms(rep.before) : rep.gap_before_rmse_n;
+  const double judged_after_n = law_in_part ? in_sample_rms(current_fit) : current_heldout;
   const FitQuality q =
       fit_quality(first, runner_up, judged_before_n, judged_after_n, rep.noise_n, law_in_part, o);
   if (!names.empty() && q == FitQuality::OneBite)
