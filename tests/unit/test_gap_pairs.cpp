@@ -273,3 +273,18 @@ TEST(GapPairs, ALagNamedBeforeItsPartnerIsChosenAgainBesideIt) {
     return n.find("is named instead") != std::string::npos;
   })) << why;
 }
+
+TEST(GapPairs, LoadTransferWithSpeedFrictionIsJudgedOnAllRuns) {
+  // The referee's ground pair 3 (generator B, seed 1): load transfer with speed friction. Held
+  // out, a fold fitted on two of the three runs trades the tyre's shape for the load and misses
+  // the third run by hundreds of newtons, so no candidate and no pair passed and the set said
+  // `unexplained` (this test fails so). Fitted together on all runs the two leave the floor.
+  const auto [inj, res, why] = referee_pair(gap::Condition::Ground, sim::Generator::B, 3);
+  ASSERT_EQ(inj.effect, "load_transfer");
+  ASSERT_EQ(inj.effect2, "speed_friction");
+  EXPECT_TRUE(res.correct()) << ::testing::PrintToString(res.verdict) << why;
+  EXPECT_NEAR(res.estimate2, res.truth.magnitude2, 0.15 * res.truth.magnitude2) << why;
+  EXPECT_TRUE(std::any_of(res.notes.begin(), res.notes.end(), [](const std::string& n) {
+    return n.find("N in-sample") != std::string::npos;
+  })) << why;
+}
