@@ -99,9 +99,10 @@ std::optional<CapEvidence> cap_behind_lag(const Report& rep, const std::vector<R
   // F + dt dF/dt (a fast ramp's runaway reads lower than a slow one's). (Not behind a
   // relaxation: a relaxing tyre on a fast ramp runs away below its steady peak at one force in
   // every run, as at a cap, and the curve fitted with it peaks above that: generator C's roller
-  // time offset of 97 ms, named a relaxation, and B's long relaxations were given caps.)
+  // time offset of 97 ms, named a relaxation, and B's long relaxations were given caps; a
+  // relaxation named beside a time offset too: a 0.33 m one at 4 km/h.)
   const auto dt_at = param_offset(rep.accepted, Effect::TimeOffset);
-  if (!dt_at) return std::nullopt;
+  if (!dt_at || param_offset(rep.accepted, Effect::RelaxationLength)) return std::nullopt;
   const double dt_s = rep.after.params.at(*dt_at);
   double lo = INFINITY, hi = 0, sum = 0;
   for (const Run& r : runs) {
