@@ -416,11 +416,15 @@ struct PairFound {
 /// each member gains the gain gate over the other alone, and each has the evidence only it
 /// leaves. Where none passes, pairs with load transfer are judged the same way in-sample
 /// (left_in_sample_n: what forward selection left on all runs), when the pair leaves no more than
-/// the fit-quality factor x the floor (noise_n) in-sample.
+/// the fit-quality factor x the floor (noise_n) in-sample. Without left_in_sample_n (forward
+/// selection named an effect, which held out explains part of the gap) no pair is judged
+/// in-sample: a truck's time offset, its residual's rest fitted by load transfer in-sample, was
+/// said `load_transfer` first.
 std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::vector<Effect>& base,
                                       const std::vector<EffectScore>& round1, double gap_before_n,
                                       double left_n, const Fit& base_fit, const Fitter& fit,
-                                      double noise_n, double left_in_sample_n, const Options& o);
+                                      double noise_n, std::optional<double> left_in_sample_n,
+                                      const Options& o);
 
 /// A relaxation length or time offset named beside later effects, replaced by its twin
 /// (lag_swap.cpp).

@@ -75,7 +75,8 @@ bool passes(PairFound& p, double gap_before_n, double left_n, const std::vector<
 std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::vector<Effect>& base,
                                       const std::vector<EffectScore>& round1, double gap_before_n,
                                       double left_n, const Fit& base_fit, const Fitter& fit,
-                                      double noise_n, double left_in_sample_n, const Options& o) {
+                                      double noise_n, std::optional<double> left_in_sample_n,
+                                      const Options& o) {
   std::vector<const EffectScore*> scored;
   for (const auto& s : round1)
     if (s.round == 0 && !is_nuisance(s.effect)) scored.push_back(&s);
@@ -145,6 +146,7 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
   });
   for (PairFound& p : found)
     if (passes(p, gap_before_n, left_n, runs, o)) return std::move(p);
+  if (!left_in_sample_n) return std::nullopt;
   // In-sample, a load-transfer pair must also leave no structure: its in-sample error within
   // the fit-quality factor x the floor (a curve that is not a Magic Formula, reshaped by the
   // load, leaves some).
@@ -153,7 +155,7 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
       [](const PairFound& x, const PairFound& y) { return x.in_sample_n < y.in_sample_n; });
   for (PairFound& p : found_in_sample) {
     if (p.in_sample_n > o.noise_factor * noise_n) break;
-    if (passes(p, in_sample_rms(base_fit), left_in_sample_n, runs, o)) return std::move(p);
+    if (passes(p, in_sample_rms(base_fit), *left_in_sample_n, runs, o)) return std::move(p);
   }
   return std::nullopt;
 }

@@ -347,8 +347,10 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   // does better by the gain gate.
   if (named(chosen).size() <= 2 && current_heldout > o.noise_factor * rep.noise_n) {
     std::vector<Run>& entry = entry_runs ? *entry_runs : runs;  // the runs round 1 scored
-    if (auto p = search_pairs(entry, base, rep.effects, rep.gap_before_rmse_n, current_heldout,
-                              rep.before, fit, rep.noise_n, in_sample_rms(current_fit), o)) {
+    if (auto p = search_pairs(
+            entry, base, rep.effects, rep.gap_before_rmse_n, current_heldout, rep.before, fit,
+            rep.noise_n,
+            named(chosen).empty() ? std::optional(in_sample_rms(current_fit)) : std::nullopt, o)) {
       const std::string before_names = after_names();
       for (auto& e : rep.effects)
         if (e.accepted) {
