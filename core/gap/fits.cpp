@@ -85,6 +85,26 @@ bool contains(const std::vector<Effect>& model, Effect e) {
   return std::find(model.begin(), model.end(), e) != model.end();
 }
 
+}  // namespace
+
+EffectScore score_at(Effect e, const std::vector<Effect>& model, const Fit& f) {
+  EffectScore s;
+  s.effect = e;
+  const auto at = *param_offset(model, e);
+  const auto eps = effect_params(e);
+  for (std::size_t j = 0; j < eps.size(); ++j) s.params.emplace_back(eps[j].name, f.params[at + j]);
+  return s;
+}
+
+std::vector<Effect> named_effects(const std::vector<Effect>& model) {
+  std::vector<Effect> out;
+  for (Effect e : model)
+    if (!is_nuisance(e)) out.push_back(e);
+  return out;
+}
+
+namespace {
+
 /// Half a quantisation step of a constant reference, the largest over the runs (0: none).
 double quantisation_bias_bound(const std::vector<const Run*>& runs) {
   double bound = 0;

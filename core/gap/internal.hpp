@@ -42,6 +42,11 @@ inline bool is_load_transfer(Effect e) {
 /// Where e's first parameter sits in the params of a fit of model (after B, C, D, E and the
 /// effects before it); nothing when the model lacks it.
 std::optional<std::size_t> param_offset(const std::vector<Effect>& model, Effect e);
+/// e's score as the fit of model holds it: its parameters at the fit's values (the gains and
+/// the decision are the caller's).
+EffectScore score_at(Effect e, const std::vector<Effect>& model, const Fit& f);
+/// The model's effects that are named (its nuisance terms left out), in the model's order.
+std::vector<Effect> named_effects(const std::vector<Effect>& model);
 /// The slip bias the nuisance terms of a model may take: half a quantisation step of a constant
 /// reference, and the tyre's shift when the model carries it (unless slip_offset takes it).
 double nuisance_bias_bound(const std::vector<const Run*>& runs, const std::vector<Effect>& model);

@@ -26,9 +26,8 @@ std::optional<Effect> twin(Effect e) {
 std::optional<LagSwap> swap_lag_twin(const std::vector<Run>& runs,
                                      const std::vector<Effect>& chosen, double current_heldout_n,
                                      double gap_before_n, const Fit& base_fit, const Fitter& fit) {
-  std::size_t named = 0;
-  for (Effect e : chosen) named += is_nuisance(e) ? 0 : 1;
-  if (named < 2 || run_speed_spread(runs) < kSpeedFrictionMinSpeedSpread) return std::nullopt;
+  if (named_effects(chosen).size() < 2 || run_speed_spread(runs) < kSpeedFrictionMinSpeedSpread)
+    return std::nullopt;
   for (Effect e : chosen) {
     const auto other = twin(e);
     if (!other || std::find(chosen.begin(), chosen.end(), *other) != chosen.end()) continue;
@@ -41,11 +40,7 @@ std::optional<LagSwap> swap_lag_twin(const std::vector<Run>& runs,
     s.fit = fit(pointers(runs), s.model);
     for (Effect m : s.model)
       if (!is_nuisance(m) && param_at_bound(s.model, m, s.fit)) return std::nullopt;
-    s.score.effect = *other;
-    const auto at = *param_offset(s.model, *other);
-    const auto eps = effect_params(*other);
-    for (std::size_t j = 0; j < eps.size(); ++j)
-      s.score.params.emplace_back(eps[j].name, s.fit.params[at + j]);
+    s.score = score_at(*other, s.model, s.fit);
     s.score.gain = 1.0 - s.heldout_n / std::max(gap_before_n, 1e-12);
     s.score.delta_bic = s.fit.bic() - base_fit.bic();
     s.score.heldout_rmse_before_n = gap_before_n;

@@ -27,15 +27,6 @@ bool inside(const std::vector<Effect>& model, Effect e, const Fit& f) {
   return param_offset(model, e) && !param_at_bound(model, e, f);
 }
 
-EffectScore member(Effect e, const std::vector<Effect>& model, const Fit& f) {
-  EffectScore s;
-  s.effect = e;
-  const auto at = *param_offset(model, e);
-  const auto eps = effect_params(e);
-  for (std::size_t j = 0; j < eps.size(); ++j) s.params.emplace_back(eps[j].name, f.params[at + j]);
-  return s;
-}
-
 /// Puts the member that contributes more first (the verdict's order is the model's), then
 /// names the pair only when it explains the gap as a first effect must (the fit-quality share),
 /// does better than forward selection by the gain gate, passes the BIC margin for its two
@@ -118,8 +109,8 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
     // Each member's place: the pair against the other member alone.
     p.gain_over_a = 1.0 - p.heldout_n / std::max(alone_n(b), 1e-12);
     p.gain_over_b = 1.0 - p.heldout_n / std::max(alone_n(a), 1e-12);
-    p.a = member(a, model, f);
-    p.b = member(b, model, f);
+    p.a = score_at(a, model, f);
+    p.b = score_at(b, model, f);
     p.in_sample_n = in_sample_rms(f);
     // Load transfer's pairs also judged in-sample (below): held out, a fold fitted on fewer runs
     // trades the tyre's shape for the load (B's ground pair 3, load transfer with speed friction:

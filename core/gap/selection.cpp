@@ -69,16 +69,11 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   // The baseline's nuisance terms stay in every model (but the tyre's shift, which each
   // candidate may do without); they are not named.
   const std::vector<Effect> base = rep.baseline_effects;
-  auto named = [&](const std::vector<Effect>& model) {
-    std::vector<Effect> out;
-    for (Effect e : model)
-      if (!is_nuisance(e)) out.push_back(e);
-    return out;
-  };
   std::vector<Effect> chosen = base;
   auto after_names = [&] {
     std::string out;
-    for (Effect e : named(chosen)) out += (out.empty() ? "" : ", ") + std::string(to_string(e));
+    for (Effect e : named_effects(chosen))
+      out += (out.empty() ? "" : ", ") + std::string(to_string(e));
     return out;
   };
   std::map<Effect, EffectScore> latest;  // each candidate's score in the last round it was scored
@@ -345,12 +340,14 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   // heavy wheel under load transfer named with a pressure lag, its inertia 0.68 for 0.86 kg m^2
   // and 18 N left held out; the right pair leaves 16 N): the pair replaces them only where it
   // does better by the gain gate.
-  if (named(chosen).size() <= 2 && current_heldout > o.noise_factor * rep.noise_n) {
+  if (named_effects(chosen).size() <= 2 && current_heldout > o.noise_factor * rep.noise_n) {
     std::vector<Run>& entry = entry_runs ? *entry_runs : runs;  // the runs round 1 scored
-    if (auto p = search_pairs(
-            entry, base, rep.effects, rep.gap_before_rmse_n, current_heldout, rep.before, fit,
-            rep.noise_n,
-            named(chosen).empty() ? std::optional(in_sample_rms(current_fit)) : std::nullopt, o)) {
+    if (auto p =
+            search_pairs(entry, base, rep.effects, rep.gap_before_rmse_n, current_heldout,
+                         rep.before, fit, rep.noise_n,
+                         named_effects(chosen).empty() ? std::optional(in_sample_rms(current_fit))
+                                                       : std::nullopt,
+                         o)) {
       const std::string before_names = after_names();
       for (auto& e : rep.effects)
         if (e.accepted) {
@@ -406,7 +403,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   }
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
-  const std::vector<Effect> names = named(chosen);
+  const std::vector<Effect> names = named_effects(chosen);
   double first = 0.0, runner_up = 0.0;  // runner_up: the largest other round-1 gain
   for (const auto& e : rep.effects) {
     if (names.empty()) break;
@@ -451,13 +448,13 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   // still take a structure smaller than the noise past low gates (generator B's ground nulls
   // under generator A's, before the derivatives took the sampler's clock: load transfer took
   // 12 % of a 4.6 N gap on a 9.8 N floor), but that is not shown to be the effect's.
-  if (!named(chosen).empty() && rep.gap_before_rmse_n < o.min_gap_over_floor * rep.noise_n)
+  if (!named_effects(chosen).empty() && rep.gap_before_rmse_n < o.min_gap_over_floor * rep.noise_n)
     veto(fmt::format(
              "the baseline's held-out gap ({:.1f} N) is within the noise floor ({:.1f} N; under "
              "{:.2g} x it): {} would take {:.0f} % of it, but there is nothing to explain beyond "
              "the noise, so no effect is named",
              rep.gap_before_rmse_n, rep.noise_n, o.min_gap_over_floor,
-             to_string(named(chosen).front()),
+             to_string(named_effects(chosen).front()),
              100 * (1 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12))),
          "passed, but the baseline's gap is within the noise floor (see the notes)");
   rep.accepted = chosen;
