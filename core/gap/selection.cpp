@@ -108,9 +108,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       }
       s.gain = 1.0 - s.heldout_rmse_after_n / std::max(current_heldout, 1e-12);
       s.delta_bic = f.bic() - current_fit.bic();
-      const auto eps = effect_params(e);
-      for (std::size_t j = 0; j < eps.size(); ++j)
-        s.params.emplace_back(eps[j].name, f.params[f.params.size() - eps.size() + j]);
+      s.params = score_at(e, model, f).params;
       scores.push_back(s);
       fits.push_back(std::move(f));
       models.push_back(std::move(model));
@@ -161,8 +159,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
         sc.heldout_rmse_before_n = ref.heldout_n;
         sc.gain = 1.0 - e_own / std::max(ref.heldout_n, 1e-12);
         sc.delta_bic = f.bic() - ref.bic;
-        for (std::size_t j = 0; j < sc.params.size(); ++j)
-          sc.params[j].second = f.params[f.params.size() - sc.params.size() + j];
+        sc.params = score_at(sc.effect, models[i], f).params;
         fits[i] = std::move(f);
         own_runs[i] = std::move(own);
       }
