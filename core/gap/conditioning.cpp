@@ -57,17 +57,6 @@ constexpr double kInitialWindowS = 0.04;
 /// A quantised roller spanning fewer levels than this is held at speed (a ripple of 5e-4 of
 /// 5.5 km/h is 3 steps of 0.5 mm/s peak to peak, the rounding one more).
 constexpr double kHeldRollerSteps = 5.0;
-/// Past this slip the wheel is taken as locked.
-constexpr double kLockSlip = 0.9;
-/// A lock-up runaway starts past the linear region: jumps below this slip are noise. (2 %: a
-/// wheel capped by the cradle below its peak runs away from there.)
-constexpr double kRunawayMinSlip = 0.02;
-/// A runaway's jump stays: this many samples after it are all above the slip before it.
-constexpr std::size_t kRunawayHoldSamples = 2;
-/// Through a runaway the tyre's force falls from its peak (C's MF 6.1 tyres: 20-30 % by the lock)
-/// while a brake's line pressure or a wheel's inertial force rises: a channel that stays within
-/// 2 % of the force before the jump and ends 5 % under it shows the tyre.
-constexpr double kRunawayTyreRiseRatio = 1.02, kRunawayTyreFallRatio = 0.95;
 /// The brake is at rest below this pressure: a run starts at the event lead-in's last sample
 /// under it (the rise from rest tells a dead zone from a slip offset). Not earlier: over 50 ms
 /// of rest a pressure channel clipped at zero reads its noise as a mean force, a dead zone of a
@@ -118,57 +107,13 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     take(e.lead_in[i]);
   measure_rest_slip(full, std::span(e.lead_in).first(rest), kRestPressureBar);
   for (const auto& s : e.samples) take(s);
-  // The lock-up runaway: past the peak a wheel can lose speed within one or two frames. There the
-  // slip is measured across a single frame and the force is dominated by the wheel's deceleration
-  // (I a / R^2, a numerical derivative of a step): not quasi-static data. The run is cut where
-  // the slip first jumps by more than runaway_slip_per_sample between two samples and stays up
-  // (the next kRunawayHoldSamples samples above the level before the jump by that much): a light
-  // wheel on a long relaxation length at 2-3 km/h oscillates by +-4 % slip at 25 Hz, and each
-  // upswing of that is a jump that falls back, not a lock-up.
-  // A locked wheel is cut as well: the rim is held by the brake, I w' = F R - Tb no longer holds.
-  {
-    auto slip_at = [&](std::size_t k) { return 1.0 - v_wheel[k] / full.v_ref_mps[k]; };
-    auto stays_up = [&](std::size_t i, double level) {
-      for (std::size_t k = i + 1; k < std::min(v_wheel.size(), i + 1 + kRunawayHoldSamples); ++k)
-        if (slip_at(k) <= level) return false;
-      return true;
-    };
-    // A channel that falls through the runaway shows the tyre (a brake's line pressure rises on
-    // with the pedal while the wheel locks; a wheel's inertial force in the channel, I a / R^2,
-    // rises too): on the ground its runaway is the tyre's curve past the peak, kept up to the lock.
-    auto falls_through = [&](std::size_t i) {
-      if (c.bench != can::BenchKind::Ground) return false;
-      std::size_t j = i;
-      while (j < v_wheel.size() && slip_at(j) < kLockSlip) ++j;
-      if (j < i + kRunawayHoldSamples + 1) return false;
-      const double before = full.force_n[i - 1];
-      const double top = *std::max_element(full.force_n.begin() + static_cast<std::ptrdiff_t>(i),
-                                           full.force_n.begin() + static_cast<std::ptrdiff_t>(j));
-      return before > 0 && top <= kRunawayTyreRiseRatio * before &&
-             full.force_n[j - 1] < kRunawayTyreFallRatio * before;
-    };
-    bool kept_runaway = false;
-    for (std::size_t i = 1; i < v_wheel.size(); ++i) {
-      const double s0 = slip_at(i - 1);
-      const double s1 = slip_at(i);
-      bool runaway = !kept_runaway && o.runaway_slip_per_sample > 0 && s0 > kRunawayMinSlip &&
-                     s1 - s0 > o.runaway_slip_per_sample &&
-                     stays_up(i, s0 + o.runaway_slip_per_sample);
-      if (runaway && falls_through(i)) {
-        kept_runaway = true;
-        runaway = false;
-      }
-      if (runaway || s1 >= kLockSlip) {
-        full.runaway = runaway;
-        full.runaway_force_n = full.force_n[i - 1];
-        full.t_s.resize(i);
-        full.v_ref_mps.resize(i);
-        v_wheel.resize(i);
-        pressure.resize(i);
-        full.force_n.resize(i);
-        break;
-      }
-    }
+  if (const std::size_t keep = runaway_cut(full, v_wheel, c.bench, o.runaway_slip_per_sample);
+      keep < full.t_s.size()) {
+    full.t_s.resize(keep);
+    full.v_ref_mps.resize(keep);
+    v_wheel.resize(keep);
+    pressure.resize(keep);
+    full.force_n.resize(keep);
   }
   if (full.t_s.size() < kMinRunSamples)
     throw InputError(

@@ -1,6 +1,7 @@
 #pragma once
-// Helpers shared by the diagnosis's own files (conditioning, effects, fits, selection, cradle cap,
-// the two modes); not part of the public interface in gap.hpp.
+// Helpers shared by the diagnosis's own files (effects, fits, selection, cradle cap, the two
+// modes); not part of the public interface in gap.hpp. The channels' own (smoothing, clocks,
+// quantisation, droop, ripple, levelling) are channels.hpp's.
 #include <algorithm>
 #include <array>
 #include <functional>
@@ -9,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/gap/channels.hpp"
 #include "core/gap/gap.hpp"
 
 namespace brakefit::gap {
@@ -57,185 +59,6 @@ bool tyre_shift_inside(const Fit& f, const std::vector<Effect>& model,
 /// The model with its tyre shift swapped for the quantisation's bias alone (or dropped).
 std::vector<Effect> without_tyre_shift(const std::vector<Effect>& model,
                                        const std::vector<const Run*>& runs);
-
-/// Zero-phase Savitzky-Golay smoothing (quadratic, centred; the window shrinks at the ends).
-std::vector<double> smooth(const std::vector<double>& x, int half_window);
-/// The sampler's clock under the stamps: a tester samples on a regular clock and stamps each
-/// sample early or late (jitter, a 1 ms stamp resolution). Where the stamps scatter about one line
-/// of the sample index (no drift wider than a quarter interval), that line; otherwise (uneven
-/// sampling, a dropped sample) the stamps smoothed as the channels are, made monotone.
-/// A sampler's interval read on a run of stamps, and its standard error.
-struct SamplerInterval {
-  double interval_s = 0, se_s = 0;
-};
-/// The run's line takes the event's interval where that is the better read (a short stop's 11
-/// samples under 5 ms of jitter read a 50 Hz sampler 2.6 % slow, and the declared pressure filter
-/// over that clock read a fast stop's force late: a time offset of -0.8 ms took 40 % of a null
-/// set's gap), and a whole number of milliseconds within three standard errors of it (a tester's
-/// timer ticks in them).
-std::vector<double> sampler_clock(const std::vector<double>& stamps_s, int half_window,
-                                  std::optional<SamplerInterval> event = std::nullopt);
-/// The interval read on every stamp of an event (its lead-in at rest too). nullopt: too few
-/// stamps, or not one regular clock.
-std::optional<SamplerInterval> sampler_interval(const std::vector<double>& stamps_s,
-                                                int half_window);
-/// The median of the intervals between successive times (0 for fewer than two).
-double median_interval_s(const std::vector<double>& t_s);
-/// Central differences (one-sided at the ends).
-std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x);
-/// Linear interpolation of x(t) at `at`, held at the ends.
-double interp(const std::vector<double>& t, const std::vector<double>& x, double at);
-/// The Magic Formula of a fit's (or parameter vector's) first four: B, C, D, E.
-inline MfParams curve_of(const std::vector<double>& params) {
-  return MfParams{params[0], params[1], params[2], params[3], 0, 0};
-}
-/// The line's force at a run's point: the channel with a declared pressure filter (5-20 ms)
-/// undone (the line leads the channel by tau times its rate). On a fast ramp the channel reads a
-/// bar low: the wheel moves where the line, not the channel, has passed a threshold.
-inline double line_force_n(const Run& r, std::size_t i) {
-  const bool rate = r.pressure_rate_bar_per_s.size() == r.force_n.size();
-  return r.force_n[i] +
-         (rate ? r.pressure_filter_s * r.brake_gain_n_per_bar * r.pressure_rate_bar_per_s[i] : 0.0);
-}
-/// The middle of v (of an even count, the upper of the two middles), by partial sorting in place:
-/// the robust centre the conditioning's noise, step and speed estimates share. Not empty.
-inline double upper_median(std::vector<double>& v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-/// A channel's noise: the robust scale of its second differences, at least step/sqrt(12); step
-/// is its quantisation step (0: not quantised).
-struct ChannelNoise {
-  double sd = 0.0, step = 0.0;
-};
-ChannelNoise channel_noise(const std::vector<double>& x);
-/// A quantised channel rebuilt from its transitions: where the level steps between two samples
-/// the signal crossed the middle of the two levels half-way in time; a monotone cubic through those
-/// points (each one's slope the parabola's through it and its neighbours), linear beyond them,
-/// and never more than half a step from the level read.
-std::vector<double> dequantise(const std::vector<double>& t, const std::vector<double>& x,
-                               double step);
-/// The error a rebuilt channel y keeps from where each transition fell inside its sample
-/// interval: |dy/dt| dt / sqrt(12), at most step / sqrt(12), per sample.
-std::vector<double> rebuilt_timing_sd(const std::vector<double>& t, const std::vector<double>& y,
-                                      double step);
-/// A roller held at speed and read through a quantised channel whose levels its encoder's ripple
-/// dithers: the smooth speed under the ripple (a quadratic trend fitted with the ripple's two
-/// first harmonics to the staircase). Empty when the run is too short to tell them apart.
-std::vector<double> held_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
-                                      double roller_radius_m);
-/// A run shorter than this (samples up to the lock or runaway, below a force cap) cannot be
-/// smoothed and fitted. A 50 Hz export of a fast ground stop holds 8-11 samples from the pressure's
-/// rise to the lock: few, but its linear region and peak, and the runs are fitted pooled.
-inline constexpr std::size_t kMinRunSamples = 8;
-/// Runs shorter than this are diagnosed, and the report says what they cannot tell alone.
-inline constexpr std::size_t kShortRunSamples = 20;
-/// A roller's ripple is fitted (held_roller_speed, drooping_roller_speed) when the run spans this
-/// many of its turns.
-inline constexpr double kHeldRollerMinTurns = 1.0;
-/// A roller whose drive droops under the brake's force, read through a quantised channel
-/// (roller_droop.cpp): its speed as a level, a droop following the force behind a lag (0-0.4 s), a
-/// slow trend and the ripple, fitted to the staircase's transitions. Empty where the staircase
-/// does not droop by half a step between its lightest and heaviest fifths of load (a held roller),
-/// or the fit misses the transitions.
-struct RollerDroop {
-  std::vector<double> v_ref_mps;  ///< the rebuilt speed (empty: not a drooping roller)
-  double mps_per_n = 0.0;         ///< the speed lost per newton of lagged force (> 0)
-  double lag_s = 0.0;
-};
-RollerDroop drooping_roller_speed(const std::vector<double>& t_s, const std::vector<double>& v,
-                                  const std::vector<double>& force_n, double roller_radius_m,
-                                  double step_mps);
-/// One roller drive droops alike in every run of a station: a run whose droop stayed under half a
-/// quantisation step (a short stop, its staircase held on one level) takes the median droop of
-/// the runs where it was fitted, its mean speed kept (the slip recomputed). Returns a note, or
-/// empty where no run was changed.
-std::string share_roller_droop(std::vector<Run>& runs);
-/// A fifth wheel's ripple is read from its own speed on runs spanning this many revolutions.
-/// Over fewer the trend's misfit (a spline knotted every 0.75 revolutions) projects onto the
-/// ripple's columns as much as onto its neighbours': 10 of generator B's 140 ground runs of
-/// 1.5-2.5 revolutions read amplitudes 1.7-11x their encoder's (4e-4 for 3.5e-5, load transfer
-/// seed 101097), and no test of the fit told them apart. Shorter runs place the others'
-/// amplitude (share_fifth_wheel_ripple).
-constexpr double kReferenceRippleRevolutions = 2.5;
-/// A fifth wheel's once-per-revolution ripple read from its own speed (reference_ripple.cpp).
-struct ReferenceRipple {
-  bool found = false;
-  double amplitude = 0.0;     ///< relative speed ripple
-  double revolutions = 0.0;   ///< the fifth wheel's revolutions over the run
-  double c = 0.0, s = 0.0;    ///< the ripple divided out: 1 + c cos + s sin of the rolled angle
-  std::vector<double> v_mps;  ///< the speed with the ripple divided out (when found)
-};
-/// Fits the speed as a smooth trend (a cubic spline in the rolled angle, knots 0.75 revolutions
-/// apart) times 1 + a once-per-revolution ripple; the ripple is found when significant (3
-/// standard errors) and narrow-band (more than the same fit explains at half or twice the
-/// rate). Nothing when the run spans fewer than kReferenceRippleRevolutions.
-std::optional<ReferenceRipple> fifth_wheel_ripple(const std::vector<double>& t_s,
-                                                  const std::vector<double>& v_mps,
-                                                  double radius_m);
-
-/// Runs whose fifth wheel's ripple was not found in their own speed (too short to tell it from
-/// the trend) take the median amplitude of those that found it and scan its phase on their
-/// speed (against the same spline trend); it is taken out of their slip and deceleration. Where
-/// it cannot be placed its slip noise carries it (the floor). A run that found its own over
-/// few revolutions at an amplitude far from the others' is placed at theirs the same way.
-/// Returns a note (empty: none).
-std::string share_fifth_wheel_ripple(std::vector<Run>& runs);
-/// A once-per-revolution speed ripple: each encoder's speed read as v (1 + c cos + s sin of its
-/// rolled angle), for the wheel [0] and the reference [1] where used.
-struct SpeedRipple {
-  std::array<bool, 2> used{};
-  std::array<double, 2> c{}, s{};
-};
-/// Takes a ripple out of a run's slip, the wheel's acceleration and the reference's deceleration,
-/// and out of what its slip noise was measured on (the noise measured again, its slip_sd's
-/// measured part replaced). The run's probe stays as it was (AsMeasured: an estimate that starts
-/// from the slip as conditioned again) or becomes the probe without the ripple (WithoutRipple:
-/// a ripple placed once) (ripple_removal.cpp).
-enum class ProbeAfter { AsMeasured, WithoutRipple };
-void take_out_ripple(Run& r, const SpeedRipple& ripple, ProbeAfter probe_after);
-/// An encoder's unit wave through the speeds' smoother (Run::Wave): smooth(v cos angle) /
-/// smooth(v) and the same with sin, for the raw speed v, its smoothed v_smooth and the angle
-/// rolled on it (ripple_removal.cpp).
-Run::Wave smoothed_wave(const std::vector<double>& v, const std::vector<double>& v_smooth,
-                        const std::vector<double>& angle_rad, int half_window);
-/// cos and sin of the angle (times frequency_scale): the wave of a speed read before the
-/// smoother.
-Run::Wave unsmoothed_wave(const std::vector<double>& angle_rad, double frequency_scale = 1.0);
-/// Run r's wave for encoder e (0 the wheel, 1 the reference): as its smoother passed it, or cos
-/// and sin of its angle where the run carries none.
-Run::Wave encoder_wave(const Run& r, std::size_t e);
-/// The RMS of a unit ripple of any phase in the wave at point i (1/sqrt 2 unsmoothed): what a
-/// ripple left in the slip adds to its noise there.
-inline double wave_rms(const Run::Wave& w, std::size_t i) {
-  return std::sqrt(0.5 * (w.cos[i] * w.cos[i] + w.sin[i] * w.sin[i]));
-}
-/// Takes a reference ripple v (1 + c cos + s sin of its angle) out of a run, its probe too: it
-/// is placed once, before the encoders' estimates start from the slip as it leaves here.
-void take_out_reference_ripple(Run& r, double c, double s);
-
-/// The noise a channel keeps after the smoother (half window), measured on the channel: right
-/// for white, anti-correlated and correlated errors alike.
-/// Empty when the series is too short to tell noise from signal (4 wide windows).
-std::optional<double> smoothed_noise_sd(const std::vector<double>& x, int half_window);
-/// White-noise gain of the smoother (the centre Savitzky-Golay weights: sqrt(sum w^2)).
-double smoothing_noise_gain(int half_window);
-
-/// Levels the runs' slip biases from a constant quantised reference (Run::ref_bias_bound): the
-/// slip at zero force is taken common to all runs. Returns a note for the report (empty: none).
-std::string level_reference_biases(std::vector<Run>& runs);
-
-/// Estimates each run's once-per-revolution encoder ripple (wheel and reference, for runs that
-/// span 1.5 revolutions) from the residual of the baseline (params, with its nuisance terms)
-/// and takes it out of the slip. Returns a note (empty: none found). When none is found the runs
-/// keep what the previous estimate left (KeepPrevious), or go back to the slip as conditioned
-/// (AsConditioned: a candidate's own estimate must not keep the baseline's).
-enum class WhenNoRipple { KeepPrevious, AsConditioned };
-std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<double>& params,
-                                  const std::vector<Effect>& baseline,
-                                  WhenNoRipple none = WhenNoRipple::KeepPrevious);
 
 /// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
 using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
@@ -362,6 +185,13 @@ MfParams neutral_start(const std::vector<Run>& runs);
 /// the vehicle's mass and the runs' wheel load, h/L = 2 Fz (dFz/Fz per m/s^2) / m.
 void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
                            const Options& o);
+/// Where a run is cut (runaway_cut.cpp): the number of its samples kept, up to the wheel's
+/// lock-up runaway (the slip jumps by more than runaway_slip_per_sample and stays up; on the
+/// ground not where the force channel falls with the tyre through it) or a locked wheel. Sets
+/// full.runaway and, at a cut, runaway_force_n (the force before the jump). v_wheel: the wheel's
+/// speed beside full's reference.
+std::size_t runaway_cut(Run& full, const std::vector<double>& v_wheel, can::BenchKind bench,
+                        double runaway_slip_per_sample);
 /// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,
 /// gap_before_rmse_n, noise_n); fills effects, accepted, after, gap_after_rmse_n, verdict, notes.
 /// ripple_per_candidate: the largest gains are scored again with the encoders' ripple estimated
@@ -369,6 +199,26 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
 void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effect>& candidates,
                     const Fitter& fit, const Options& o, const char* separability_note,
                     bool ripple_per_candidate);
+
+/// Forward selection's state as its rounds end: the model so far (base: the baseline's nuisance
+/// terms, never named), its fit and held-out error, and the runs they were scored on. An accepted
+/// candidate's own ripple replaces the runs; entry_runs keeps them as round 1 scored them.
+struct Selection {
+  std::vector<Run>& runs;
+  std::optional<std::vector<Run>> entry_runs;
+  std::vector<Effect> base, chosen;
+  Fit fit;
+  double heldout_n = 0;
+  /// The runs as round 1 scored them back in place (where an accepted candidate's replaced them).
+  void restore_entry_runs();
+  /// The effects named so far, comma-separated.
+  std::string named() const;
+};
+/// The checks on what forward selection named (after_selection.cpp), in order: a lag or delay
+/// swapped for its twin, a pair neither explains alone, a threshold beside a slip offset fitted
+/// below the wheel's rest, the fit-quality and noise-floor vetoes. Fills rep.accepted, after,
+/// gap_after_rmse_n, the joint estimates and the verdict.
+void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Options& o);
 
 /// The share of the structure beyond the noise that a held-out error after_n keeps of the one
 /// before_n left (noise and structure add in quadrature: sqrt(gap^2 - noise^2)); 1 where nothing

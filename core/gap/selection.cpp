@@ -1,7 +1,8 @@
-// Ranking and selection: forward selection on held-out error with the gates, the range,
-// separability, fit-quality and floor checks, each leading candidate scored with the encoders'
-// ripple seen through its own model. (The gates and the fit-quality check are gates.cpp's; the
-// held-out error, heldout.cpp's; load transfer's report, load_transfer_report.cpp's.)
+// Ranking and forward selection: one effect a round on held-out error past the gates, each
+// candidate inside its range (and the effects named before it inside theirs), beyond the
+// nuisance terms' slip and with the evidence only it leaves; separability notes; the leading
+// candidates scored with the encoders' ripple seen through their own model. (The checks on what
+// it named are after_selection.cpp's; the gates, gates.cpp's; the held-out error, heldout.cpp's.)
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -33,9 +34,6 @@ static bool params_inside(Effect e, const Fit& f) {
   return true;
 }
 
-/// Fits B, C, D, E and the effects to some runs (jointly, or with B, C, D, E held).
-using Fitter = std::function<Fit(const std::vector<const Run*>&, const std::vector<Effect>&)>;
-
 /// The encoders' ripple estimated against a candidate's model instead of the baseline: from the
 /// slip as conditioned, refitted and estimated again (as the baseline's is), each run's
 /// reference bias levelled again. Empty when the runs carry no ripple estimate to redo.
@@ -60,25 +58,18 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
                     const Fitter& fit, const Options& o, const char* separability_note,
                     bool ripple_per_candidate) {
   std::vector<const Run*> all = pointers(runs);
-  // The runs as they came (the baseline's ripple), kept once an accepted candidate's own ripple
-  // replaces them: restored if a veto undoes the selection.
-  std::optional<std::vector<Run>> entry_runs;
   // The slip the nuisance terms account for: half a step of a constant quantised reference, and
   // the tyre's own shift when the baseline carries it.
   const double resolution = nuisance_bias_bound(all, rep.baseline_effects);
   // The baseline's nuisance terms stay in every model (but the tyre's shift, which each
   // candidate may do without); they are not named.
-  const std::vector<Effect> base = rep.baseline_effects;
-  std::vector<Effect> chosen = base;
-  auto after_names = [&] {
-    std::string out;
-    for (Effect e : named_effects(chosen))
-      out += (out.empty() ? "" : ", ") + std::string(to_string(e));
-    return out;
-  };
+  const std::vector<Effect>& base = rep.baseline_effects;
+  Selection sel{runs, {}, base, base, rep.before, rep.gap_before_rmse_n};
+  std::vector<Effect>& chosen = sel.chosen;
+  Fit& current_fit = sel.fit;
+  double& current_heldout = sel.heldout_n;
+  std::optional<std::vector<Run>>& entry_runs = sel.entry_runs;
   std::map<Effect, EffectScore> latest;  // each candidate's score in the last round it was scored
-  double current_heldout = rep.gap_before_rmse_n;
-  Fit current_fit = rep.before;
   for (std::size_t round = 0; round < o.max_effects; ++round) {
     std::vector<EffectScore> scores;
     std::vector<Fit> fits;
@@ -192,7 +183,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
             "{}{} would explain part of the residual only with {} at the end of its physical "
             "range ({:.4g}): not accepted",
             to_string(e.effect),
-            round == 0 ? "" : fmt::format(" (round {}, after {})", round + 1, after_names()),
+            round == 0 ? "" : fmt::format(" (round {}, after {})", round + 1, sel.named()),
             eps[j].name, v));
         e.decision = fmt::format("{} at the end of its physical range ({:.4g})", eps[j].name, v);
       }
@@ -210,7 +201,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
         rep.notes.push_back(fmt::format(
             "{} (round {}, after {}) would explain part of the residual only with {}'s {} at the "
             "end of its physical range ({:.4g}): not accepted",
-            to_string(e.effect), round + 1, after_names(), to_string(prior), name, v));
+            to_string(e.effect), round + 1, sel.named(), to_string(prior), name, v));
         e.decision = fmt::format("{}'s {} at the end of its physical range ({:.4g})",
                                  to_string(prior), name, v);
       }
@@ -234,9 +225,8 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       if (inside) {
         if (const auto missing = missing_evidence(e, models[order[k]], fits[order[k]], runs)) {
           inside = false;
-          rep.notes.push_back(
-              fmt::format(fmt::runtime(missing->note),
-                          round == 0 ? "" : fmt::format(" after {}", after_names())));
+          rep.notes.push_back(fmt::format(fmt::runtime(missing->note),
+                                          round == 0 ? "" : fmt::format(" after {}", sel.named())));
           e.decision = missing->decision;
         }
       }
@@ -300,188 +290,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
         "gain {:.3f}, dBIC {:.1f}: {}",
         l.round + 1, l.gain, l.delta_bic, l.decision);
   }
-  // Nothing is named after all (a check below vetoes the selection): the note says why.
-  auto veto = [&](std::string note, const char* decision) {
-    rep.notes.push_back(std::move(note));
-    for (auto& e : rep.effects) {
-      e.accepted = false;
-      if (e.decision.rfind("accepted", 0) == 0) e.decision = decision;
-    }
-    chosen = base;
-    current_fit = rep.before;
-    current_heldout = rep.gap_before_rmse_n;
-    if (entry_runs) {
-      runs = std::move(*entry_runs);
-      entry_runs.reset();
-      all = pointers(runs);
-    }
-  };
-  // Lag or delay chosen again beside the effects named after it (lag_swap.cpp).
-  if (auto s =
-          swap_lag_twin(runs, chosen, current_heldout, rep.gap_before_rmse_n, rep.before, fit)) {
-    for (auto& e : rep.effects)
-      if (e.accepted && e.effect == s->replaced) {
-        e.accepted = false;
-        e.decision = fmt::format("replaced by {} (see the notes)", to_string(s->score.effect));
-      }
-    s->score.round = static_cast<int>(o.max_effects);
-    rep.effects.push_back(s->score);
-    rep.notes.push_back(std::move(s->note));
-    chosen = std::move(s->model);
-    current_fit = std::move(s->fit);
-    current_heldout = s->heldout_n;
-  }
-  // Two effects that neither explains alone (their bends partly cancel): the leading candidates
-  // in pairs, when a structured gap is left and at most two were named. With two named, the
-  // first can have taken part of its partner's bend and the second another effect's place (a
-  // heavy wheel under load transfer named with a pressure lag, its inertia 0.68 for 0.86 kg m^2
-  // and 18 N left held out; the right pair leaves 16 N): the pair replaces them only where it
-  // does better by the gain gate.
-  if (named_effects(chosen).size() <= 2 && current_heldout > o.noise_factor * rep.noise_n) {
-    std::vector<Run>& entry = entry_runs ? *entry_runs : runs;  // the runs round 1 scored
-    if (auto p =
-            search_pairs(entry, base, rep.effects, rep.gap_before_rmse_n, current_heldout,
-                         rep.before, fit, rep.noise_n,
-                         named_effects(chosen).empty() ? std::optional(in_sample_rms(current_fit))
-                                                       : std::nullopt,
-                         o)) {
-      const std::string before_names = after_names();
-      for (auto& e : rep.effects)
-        if (e.accepted) {
-          e.accepted = false;
-          e.decision = fmt::format("replaced by the pair {} and {} (see the notes)",
-                                   to_string(p->a.effect), to_string(p->b.effect));
-        }
-      for (EffectScore* m : {&p->a, &p->b}) {
-        const Effect other = m == &p->a ? p->b.effect : p->a.effect;
-        m->accepted = true;
-        m->round = static_cast<int>(o.max_effects);
-        m->decision = fmt::format(
-            "accepted with {} (a pair: together {:.0f} % of the gap; each gains {:.0f} % over "
-            "the other alone)",
-            to_string(other), 100 * p->gain, 100 * (m == &p->a ? p->gain_over_a : p->gain_over_b));
-        rep.effects.push_back(*m);
-      }
-      rep.notes.push_back(fmt::format(
-          "forward selection left {:.1f} N of structured gap ({}); {} and {} fitted together "
-          "leave {:.1f} N {} ({:.0f} % of the gap explained{}): {}; both are named",
-          current_heldout, before_names.empty() ? "nothing named" : before_names + " named",
-          to_string(p->a.effect), to_string(p->b.effect),
-          p->in_sample ? p->in_sample_n : p->heldout_n, p->in_sample ? "in-sample" : "held out",
-          100 * p->gain,
-          p->in_sample ? fmt::format(", in-sample: with one run left out load transfer's fold "
-                                     "trades the tyre's shape for the load, {:.1f} N held out",
-                                     p->heldout_n)
-                       : std::string(),
-          before_names.empty()
-              ? "each alone bends the curve against the other, so neither passed by itself"
-              : "one effect at a time, the first took part of its partner's bend"));
-      if (entry_runs) {
-        runs = std::move(*entry_runs);
-        entry_runs.reset();
-        all = pointers(runs);
-      }
-      chosen = p->model;
-      current_fit = std::move(p->fit);
-      current_heldout = p->heldout_n;
-    }
-  }
-  // A slip offset fitted below where the wheel rested carries a threshold's force without slip:
-  // the threshold is named beside it, and every later fit holds the offset at the rest.
-  if (auto t = threshold_at_rest(runs, chosen, current_fit, current_heldout, rep.noise_n, fit)) {
-    runs = std::move(t->runs);
-    t->score.accepted = true;
-    t->score.round = static_cast<int>(o.max_effects);
-    rep.effects.push_back(t->score);
-    rep.notes.push_back(std::move(t->note));
-    chosen = std::move(t->model);
-    current_fit = std::move(t->fit);
-    current_heldout = t->heldout_n;
-  }
-  // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
-  // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
-  const std::vector<Effect> names = named_effects(chosen);
-  double first = 0.0, runner_up = 0.0;  // runner_up: the largest other round-1 gain
-  for (const auto& e : rep.effects) {
-    if (names.empty()) break;
-    if (e.effect == names.front())
-      first = e.gain;
-    else if (e.round == 0)
-      runner_up = std::max(runner_up, e.gain);
-  }
-  // Two or more named: the share they explain together (a pair's members may each bend the
-  // curve against the other alone).
-  if (names.size() > 1)
-    first = std::max(first, 1.0 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12));
-  // Load transfer's law is one stiffness ratio for a tyre's own load laws of D, Kx and E.
-  const bool law_in_part = !names.empty() && is_load_transfer(names.front());
-  // Whether a structured gap is left is judged on every run at once where load transfer leads:
-  // left out, a run's load and its peak trade (the deceleration follows this wheel's force), so
-  // the fastest run predicted from slower ones is off by more than the effect leaves (gap.md §9).
-  // Its gain, the bite it takes, stays held out.
-  const double judged_before_n = law_in_part ? in_sample_rms(rep.before) : rep.gap_before_rmse_n;
-  const double judged_after_n = law_in_part ? in_sample_rms(current_fit) : current_heldout;
-  const FitQuality q =
-      fit_quality(first, runner_up, judged_before_n, judged_after_n, rep.noise_n, law_in_part, o);
-  if (!names.empty() && q == FitQuality::OneBite)
-    rep.notes.push_back(fmt::format(
-        "{} explains only {:.0f} % of the held-out gap, under the fit-quality share ({:.0f} %), "
-        "but {:.1f}x the gain of any other candidate ({:.3f}): one effect stands out, which a "
-        "curve that is not a Magic Formula does not give (its candidates nibble alike); it is "
-        "named, with the gap it leaves",
-        to_string(names.front()), 100 * first, 100 * o.min_first_gain,
-        first / std::max(runner_up, 1e-12), runner_up));
-  if (!names.empty() && q == FitQuality::Nibble)
-    veto(fmt::format(
-             "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
-             "left{} against {:.1f} N of noise ({:.0f} % of the structure beyond the noise): the "
-             "residual has a structure no candidate explains (is the curve a Magic Formula?), so "
-             "no effect is named",
-             to_string(names.front()), 100 * first, judged_after_n, law_in_part ? " in-sample" : "",
-             rep.noise_n, 100 * structure_left_share(judged_before_n, judged_after_n, rep.noise_n)),
-         "passed, but vetoed by the fit-quality check (see the notes)");
-  // Nothing to explain: the baseline's held-out gap is within the noise floor (below
-  // min_gap_over_floor x the floor, the floor's own uncertainty allowed for). A candidate may
-  // still take a structure smaller than the noise past low gates (generator B's ground nulls
-  // under generator A's, before the derivatives took the sampler's clock: load transfer took
-  // 12 % of a 4.6 N gap on a 9.8 N floor), but that is not shown to be the effect's.
-  if (!named_effects(chosen).empty() && rep.gap_before_rmse_n < o.min_gap_over_floor * rep.noise_n)
-    veto(fmt::format(
-             "the baseline's held-out gap ({:.1f} N) is within the noise floor ({:.1f} N; under "
-             "{:.2g} x it): {} would take {:.0f} % of it, but there is nothing to explain beyond "
-             "the noise, so no effect is named",
-             rep.gap_before_rmse_n, rep.noise_n, o.min_gap_over_floor,
-             to_string(named_effects(chosen).front()),
-             100 * (1 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12))),
-         "passed, but the baseline's gap is within the noise floor (see the notes)");
-  rep.accepted = chosen;
-  rep.after = current_fit;
-  rep.gap_after_rmse_n = current_heldout;
-  take_joint_estimates(rep);
-  name_verdict(rep, o);
-}
-
-void take_joint_estimates(Report& rep) {
-  std::size_t at = 4;  // after B, C, D, E
-  for (Effect e : rep.accepted) {
-    const auto eps = effect_params(e);
-    for (auto& score : rep.effects)
-      if (score.effect == e && score.accepted)
-        for (std::size_t j = 0; j < eps.size() && j < score.params.size(); ++j)
-          score.params[j].second = rep.after.params.at(at + j);
-    at += eps.size();
-  }
-}
-
-void name_verdict(Report& rep, const Options& o) {
-  rep.verdict.clear();
-  for (Effect e : rep.accepted)
-    if (!is_nuisance(e)) rep.verdict.push_back(to_string(e));
-  const bool gap_left = rep.gap_after_rmse_n > o.noise_factor * rep.noise_n;
-  if (rep.verdict.empty())
-    rep.verdict.push_back(gap_left ? "unexplained" : "none");
-  else if (gap_left)
-    rep.verdict.push_back("unexplained");
+  check_selection(rep, sel, fit, o);
 }
 
 }  // namespace brakefit::gap
