@@ -42,10 +42,6 @@ void take(Report& rep, Selection& sel, Found& found, const Options& o) {
 }  // namespace
 
 void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Options& o) {
-  std::vector<Run>& runs = sel.runs;
-  std::vector<Effect>& chosen = sel.chosen;
-  Fit& current_fit = sel.fit;
-  double& current_heldout = sel.heldout_n;
   // Nothing is named after all (a check below vetoes the selection): the note says why.
   auto veto = [&](std::string note, const char* decision) {
     rep.notes.push_back(std::move(note));
@@ -53,14 +49,14 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
       e.accepted = false;
       if (e.decision.rfind("accepted", 0) == 0) e.decision = decision;
     }
-    chosen = sel.base;
-    current_fit = rep.before;
-    current_heldout = rep.gap_before_rmse_n;
+    sel.chosen = rep.baseline_effects;
+    sel.fit = rep.before;
+    sel.heldout_n = rep.gap_before_rmse_n;
     sel.restore_entry_runs();
   };
   // Lag or delay chosen again beside the effects named after it (lag_swap.cpp).
-  if (auto s =
-          swap_lag_twin(runs, chosen, current_heldout, rep.gap_before_rmse_n, rep.before, fit)) {
+  if (auto s = swap_lag_twin(sel.runs, sel.chosen, sel.heldout_n, rep.gap_before_rmse_n, rep.before,
+                             fit)) {
     for (auto& e : rep.effects)
       if (e.accepted && e.effect == s->replaced) {
         e.accepted = false;
@@ -74,13 +70,14 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // heavy wheel under load transfer named with a pressure lag, its inertia 0.68 for 0.86 kg m^2
   // and 18 N left held out; the right pair leaves 16 N): the pair replaces them only where it
   // does better by the gain gate.
-  if (named_effects(chosen).size() <= 2 && current_heldout > o.noise_factor * rep.noise_n) {
-    std::vector<Run>& entry = sel.entry_runs ? *sel.entry_runs : runs;  // the runs round 1 scored
+  if (named_effects(sel.chosen).size() <= 2 && sel.heldout_n > o.noise_factor * rep.noise_n) {
+    std::vector<Run>& entry =
+        sel.entry_runs ? *sel.entry_runs : sel.runs;  // the runs round 1 scored
     if (auto p =
-            search_pairs(entry, sel.base, rep.effects, rep.gap_before_rmse_n, current_heldout,
-                         rep.before, fit, rep.noise_n,
-                         named_effects(chosen).empty() ? std::optional(in_sample_rms(current_fit))
-                                                       : std::nullopt,
+            search_pairs(entry, rep.baseline_effects, rep.effects, rep.gap_before_rmse_n,
+                         sel.heldout_n, rep.before, fit, rep.noise_n,
+                         named_effects(sel.chosen).empty() ? std::optional(in_sample_rms(sel.fit))
+                                                           : std::nullopt,
                          o)) {
       const std::string before_names = sel.named();
       for (auto& e : rep.effects)
@@ -102,7 +99,7 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
       rep.notes.push_back(fmt::format(
           "forward selection left {:.1f} N of structured gap ({}); {} and {} fitted together "
           "leave {:.1f} N {} ({:.0f} % of the gap explained{}): {}; both are named",
-          current_heldout, before_names.empty() ? "nothing named" : before_names + " named",
+          sel.heldout_n, before_names.empty() ? "nothing named" : before_names + " named",
           to_string(p->a.effect), to_string(p->b.effect),
           p->in_sample ? p->in_sample_n : p->heldout_n, p->in_sample ? "in-sample" : "held out",
           100 * p->gain,
@@ -114,21 +111,21 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
               ? "each alone bends the curve against the other, so neither passed by itself"
               : "one effect at a time, the first took part of its partner's bend"));
       sel.restore_entry_runs();
-      chosen = p->model;
-      current_fit = std::move(p->fit);
-      current_heldout = p->heldout_n;
+      sel.chosen = p->model;
+      sel.fit = std::move(p->fit);
+      sel.heldout_n = p->heldout_n;
     }
   }
   // A slip offset fitted below where the wheel rested carries a threshold's force without slip:
   // the threshold is named beside it, and every later fit holds the offset at the rest.
-  if (auto t = threshold_at_rest(runs, chosen, current_fit, current_heldout, rep.noise_n, fit)) {
-    runs = std::move(t->runs);
+  if (auto t = threshold_at_rest(sel.runs, sel.chosen, sel.fit, sel.heldout_n, rep.noise_n, fit)) {
+    sel.runs = std::move(t->runs);
     t->score.accepted = true;
     take(rep, sel, *t, o);
   }
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
-  const std::vector<Effect> names = named_effects(chosen);
+  const std::vector<Effect> names = named_effects(sel.chosen);
   double first = 0.0, runner_up = 0.0;  // runner_up: the largest other round-1 gain
   for (const auto& e : rep.effects) {
     if (names.empty()) break;
@@ -140,7 +137,7 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // Two or more named: the share they explain together (a pair's members may each bend the
   // curve against the other alone).
   if (names.size() > 1)
-    first = std::max(first, 1.0 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12));
+    first = std::max(first, 1.0 - sel.heldout_n / std::max(rep.gap_before_rmse_n, 1e-12));
   // Load transfer's law is one stiffness ratio for a tyre's own load laws of D, Kx and E.
   const bool law_in_part = !names.empty() && is_load_transfer(names.front());
   // Whether a structured gap is left is judged on every run at once where load transfer leads:
@@ -148,7 +145,7 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // the fastest run predicted from slower ones is off by more than the effect leaves (gap.md §9).
   // Its gain, the bite it takes, stays held out.
   const double judged_before_n = law_in_part ? in_sample_rms(rep.before) : rep.gap_before_rmse_n;
-  const double judged_after_n = law_in_part ? in_sample_rms(current_fit) : current_heldout;
+  const double judged_after_n = law_in_part ? in_sample_rms(sel.fit) : sel.heldout_n;
   const FitQuality q =
       fit_quality(first, runner_up, judged_before_n, judged_after_n, rep.noise_n, law_in_part, o);
   if (!names.empty() && q == FitQuality::OneBite)
@@ -173,18 +170,19 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // still take a structure smaller than the noise past low gates (generator B's ground nulls
   // under generator A's, before the derivatives took the sampler's clock: load transfer took
   // 12 % of a 4.6 N gap on a 9.8 N floor), but that is not shown to be the effect's.
-  if (!named_effects(chosen).empty() && rep.gap_before_rmse_n < o.min_gap_over_floor * rep.noise_n)
+  if (!named_effects(sel.chosen).empty() &&
+      rep.gap_before_rmse_n < o.min_gap_over_floor * rep.noise_n)
     veto(fmt::format(
              "the baseline's held-out gap ({:.1f} N) is within the noise floor ({:.1f} N; under "
              "{:.2g} x it): {} would take {:.0f} % of it, but there is nothing to explain beyond "
              "the noise, so no effect is named",
              rep.gap_before_rmse_n, rep.noise_n, o.min_gap_over_floor,
-             to_string(named_effects(chosen).front()),
-             100 * (1 - current_heldout / std::max(rep.gap_before_rmse_n, 1e-12))),
+             to_string(named_effects(sel.chosen).front()),
+             100 * (1 - sel.heldout_n / std::max(rep.gap_before_rmse_n, 1e-12))),
          "passed, but the baseline's gap is within the noise floor (see the notes)");
-  rep.accepted = chosen;
-  rep.after = current_fit;
-  rep.gap_after_rmse_n = current_heldout;
+  rep.accepted = sel.chosen;
+  rep.after = sel.fit;
+  rep.gap_after_rmse_n = sel.heldout_n;
   take_joint_estimates(rep);
   name_verdict(rep, o);
 }

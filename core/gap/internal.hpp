@@ -200,13 +200,13 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
                     const Fitter& fit, const Options& o, const char* separability_note,
                     bool ripple_per_candidate);
 
-/// Forward selection's state as its rounds end: the model so far (base: the baseline's nuisance
+/// Forward selection's state as its rounds end: the model so far (from the baseline's nuisance
 /// terms, never named), its fit and held-out error, and the runs they were scored on. An accepted
 /// candidate's own ripple replaces the runs; entry_runs keeps them as round 1 scored them.
 struct Selection {
   std::vector<Run>& runs;
   std::optional<std::vector<Run>> entry_runs;
-  std::vector<Effect> base, chosen;
+  std::vector<Effect> chosen;
   Fit fit;
   double heldout_n = 0;
   /// The runs as round 1 scored them back in place (where an accepted candidate's replaced them).

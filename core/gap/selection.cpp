@@ -64,7 +64,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   // The baseline's nuisance terms stay in every model (but the tyre's shift, which each
   // candidate may do without); they are not named.
   const std::vector<Effect>& base = rep.baseline_effects;
-  Selection sel{runs, {}, base, base, rep.before, rep.gap_before_rmse_n};
+  Selection sel{runs, {}, base, rep.before, rep.gap_before_rmse_n};
   std::vector<Effect>& chosen = sel.chosen;
   Fit& current_fit = sel.fit;
   double& current_heldout = sel.heldout_n;
