@@ -109,14 +109,17 @@ bool TrialResult::correct() const {
     return !verdict.empty() && (verdict.front() == "none" || verdict.front() == "unexplained");
   if (verdict.empty() || truth.effect == "none") return false;
   if (truth.pair()) {
-    const auto named = [&](const std::string& e) {
-      for (const auto& v : verdict)
-        if (v == e || inseparable(notes, v, e) ||
-            (one_speed && detail::is_lag(v) && detail::is_lag(e)))
-          return true;
-      return false;
+    // Each effect needs a name of its own: one name that a note ties to both stands for one
+    // effect, not two, so the two are matched to distinct names in the verdict.
+    const auto names = [&](const std::string& v, const std::string& e) {
+      return v == e || inseparable(notes, v, e) ||
+             (one_speed && detail::is_lag(v) && detail::is_lag(e));
     };
-    return named(truth.effect) && named(truth.effect2);
+    for (std::size_t i = 0; i < verdict.size(); ++i)
+      for (std::size_t j = 0; j < verdict.size(); ++j)
+        if (i != j && names(verdict[i], truth.effect) && names(verdict[j], truth.effect2))
+          return true;
+    return false;
   }
   if (one_speed && detail::is_lag(verdict.front()) && detail::is_lag(truth.effect)) return true;
   return inseparable(notes, verdict.front(), truth.effect);

@@ -82,6 +82,18 @@ TEST(GapPairs, APairIsCorrectOnlyWhenBothAreNamed) {
       "the data cannot separate relaxation_length from time_offset (held-out gains 0.4 "
       "and 0.4)"};
   EXPECT_TRUE(t.correct());
+  // One name cannot stand for both, even where a note ties it to the other.
+  t.verdict = {"relaxation_length", "unexplained"};
+  t.truth.effect = "load_transfer";
+  t.truth.effect2 = "relaxation_length";
+  t.notes = {"the data cannot separate relaxation_length from load_transfer (held-out gains 0.3 "
+             "and 0.3)"};
+  EXPECT_FALSE(t.correct());
+  t.verdict = {"relaxation_length", "load_transfer"};
+  EXPECT_TRUE(t.correct());
+  t.truth.effect = "brake_threshold";
+  t.truth.effect2 = "time_offset";
+  t.verdict = {"brake_threshold", "relaxation_length"};
   // At one speed a relaxation and a time offset are one lag: either name counts for the other.
   t.notes.clear();
   EXPECT_FALSE(t.correct());
