@@ -86,8 +86,9 @@ TEST(GapPairs, APairIsCorrectOnlyWhenBothAreNamed) {
   t.verdict = {"relaxation_length", "unexplained"};
   t.truth.effect = "load_transfer";
   t.truth.effect2 = "relaxation_length";
-  t.notes = {"the data cannot separate relaxation_length from load_transfer (held-out gains 0.3 "
-             "and 0.3)"};
+  t.notes = {
+      "the data cannot separate relaxation_length from load_transfer (held-out gains 0.3 "
+      "and 0.3)"};
   EXPECT_FALSE(t.correct());
   t.verdict = {"relaxation_length", "load_transfer"};
   EXPECT_TRUE(t.correct());
