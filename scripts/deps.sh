@@ -6,9 +6,10 @@ BRAKEFIT_BUILD_DEBS=(build-essential cmake ninja-build ccache pkg-config python3
   libeigen3-dev libspdlog-dev libfmt-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libssl-dev libgtest-dev libgmock-dev libbenchmark-dev
   libmodbus-dev libsqlite3-dev libsystemd-dev libgpiod-dev libceres-dev libpq-dev help2man)
-# ... and what the tests run against (scripts/test adds these): third-party clients and tools.
+# ... and what the tests run against (scripts/test adds these): third-party clients and tools, and
+# numpy, which generator C (../shared/gapgen, run by the referee's tests) imports.
 BRAKEFIT_TEST_DEBS=(libxml2-utils can-utils sqlite3 gpiod mbpoll systemd lintian man-db
-  postgresql-15 openssl)
+  postgresql-15 openssl python3-numpy)
 
 # brakefit_install_deps [test]: installs the missing packages only, never upgrading an installed
 # one (--no-upgrade). Without root, nothing is installed: it names what is missing and the command
