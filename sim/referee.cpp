@@ -108,21 +108,19 @@ bool TrialResult::correct() const {
   if (truth.effect == "misspecified")  // never an invented effect
     return !verdict.empty() && (verdict.front() == "none" || verdict.front() == "unexplained");
   if (verdict.empty() || truth.effect == "none") return false;
-  if (truth.pair()) {
-    // Each effect needs a name of its own: one name that a note ties to both stands for one
-    // effect, not two, so the two are matched to distinct names in the verdict.
-    const auto names = [&](const std::string& v, const std::string& e) {
-      return v == e || inseparable(notes, v, e) ||
-             (one_speed && detail::is_lag(v) && detail::is_lag(e));
-    };
-    for (std::size_t i = 0; i < verdict.size(); ++i)
-      for (std::size_t j = 0; j < verdict.size(); ++j)
-        if (i != j && names(verdict[i], truth.effect) && names(verdict[j], truth.effect2))
-          return true;
-    return false;
-  }
-  if (one_speed && detail::is_lag(verdict.front()) && detail::is_lag(truth.effect)) return true;
-  return inseparable(notes, verdict.front(), truth.effect);
+  // The name v stands for the effect e: its own, the other lag at one speed, or noted inseparable.
+  const auto names = [&](const std::string& v, const std::string& e) {
+    return v == e || inseparable(notes, v, e) ||
+           (one_speed && detail::is_lag(v) && detail::is_lag(e));
+  };
+  if (!truth.pair()) return names(verdict.front(), truth.effect);
+  // Each effect needs a name of its own: one name that a note ties to both stands for one effect,
+  // not two, so the two are matched to distinct names in the verdict.
+  for (std::size_t i = 0; i < verdict.size(); ++i)
+    for (std::size_t j = 0; j < verdict.size(); ++j)
+      if (i != j && names(verdict[i], truth.effect) && names(verdict[j], truth.effect2))
+        return true;
+  return false;
 }
 
 namespace {

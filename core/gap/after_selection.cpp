@@ -71,8 +71,8 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // and 18 N left held out; the right pair leaves 16 N): the pair replaces them only where it
   // does better by the gain gate.
   if (named_effects(sel.chosen).size() <= 2 && sel.heldout_n > o.noise_factor * rep.noise_n) {
-    std::vector<Run>& entry =
-        sel.entry_runs ? *sel.entry_runs : sel.runs;  // the runs round 1 scored
+    // The runs round 1 scored.
+    std::vector<Run>& entry = sel.entry_runs ? *sel.entry_runs : sel.runs;
     if (auto p =
             search_pairs(entry, rep.baseline_effects, rep.effects, rep.gap_before_rmse_n,
                          sel.heldout_n, rep.before, fit, rep.noise_n,
