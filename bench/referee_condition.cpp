@@ -121,11 +121,18 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   std::map<std::string, std::pair<int, int>> by_vehicle;  // right (named or none), all
   int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0,
       none_exact = 0, refused = 0;
+  // A wheel's inertia missed, and how many of those sets' runs could not have shown it (the
+  // truth below the smallest inertia the report says they could show).
+  int inertia_missed = 0, inertia_missed_below_reach = 0;
   for (std::size_t k = 0; k < results.size(); ++k) {
     const auto& r = results[k];
     const auto& inj = r.truth;
     const std::string said = r.verdict.empty() ? "?" : r.verdict.front();
     ++confusion[inj.effect][said];
+    if (inj.effect == "wheel_inertia" && !r.correct()) {
+      ++inertia_missed;
+      if (inj.magnitude < r.inertia_reach_kgm2) ++inertia_missed_below_reach;
+    }
     const double floor_n = std::max(r.noise_n, 1e-9);
     const double ratio = r.gap_after_n / floor_n, before_ratio = r.gap_before_n / floor_n;
     // Every miss, to be looked at one by one (trial index: --only keeps it); --why 2: the hits
@@ -137,7 +144,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
           r.exact() ? fmt::format(" (estimate {:.4g}, gap after / floor {:.2f}, before {:.2f})",
                                   r.estimate, ratio, before_ratio)
                     : fmt::format(" (gap before / floor {:.2f})", before_ratio));
-    if (!r.exact() && st.why) {
+    if ((!r.exact() && st.why) || st.why > 1) {
       for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
       for (const auto& line : r.scores) std::cerr << "    " << line << "\n";
     }
@@ -242,6 +249,14 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
         "trials)\n",
         100 * quantile(load_ratio_err, 0.5), 100 * quantile(load_ratio_err, 0.9),
         load_ratio_err.size());
+  }
+  if (inertia_missed > 0) {
+    j["wheel_inertia_missed"] = {{"sets", inertia_missed},
+                                 {"below_reach", inertia_missed_below_reach}};
+    std::cout << fmt::format(
+        "wheel_inertia missed in {} sets, {} of them below the smallest inertia their runs could "
+        "show\n",
+        inertia_missed, inertia_missed_below_reach);
   }
   j["gap_after_over_noise"] = {{"median", quantile(after_over_noise, 0.5)},
                                {"p90", quantile(after_over_noise, 0.9)}};

@@ -144,6 +144,14 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
     out += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(), trials, gates,
                        each);
   }
+  for (const auto& r : rows)
+    if (r.contains("wheel_inertia_missed"))
+      out += fmt::format(
+          "\n{} {}, gates {}: a wheel's inertia missed in {} sets, {} of them below the smallest "
+          "inertia their runs could show (the report's note where none is named).\n",
+          r["condition"].get<std::string>(), r["trial_generator"].get<std::string>(),
+          r["gate_generator"].get<std::string>(), r["wheel_inertia_missed"]["sets"].get<int>(),
+          r["wheel_inertia_missed"]["below_reach"].get<int>());
   return out;
 }
 

@@ -155,6 +155,7 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   estimate(inj.effect, t.estimate);
   if (inj.pair()) estimate(inj.effect2, t.estimate2);
   t.gap_before_n = rep.gap_before_rmse_n;
+  t.inertia_reach_kgm2 = rep.inertia_reach_kgm2;
   t.gap_after_n = rep.gap_after_rmse_n;
   t.noise_n = rep.noise_n;
   return t;

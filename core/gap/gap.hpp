@@ -319,6 +319,9 @@ struct Report {
   /// A force cap found on the runs (roller cradle): from the runaway at one force, or the fitted
   /// cradle_cap effect; NaN when none.
   double cap_n = NAN;
+  /// Where no wheel inertia is named (model vs measurement): the smallest one these runs could
+  /// have shown, in kg m^2 (infinite: none; NaN: not measured).
+  double inertia_reach_kgm2 = NAN;
 };
 
 /// A force cap on the roller (the cradle's Fz sin beta): every run ran away at one force (within
