@@ -78,6 +78,10 @@ class OthersEventFiles(unittest.TestCase):
             # A Magic Formula tyre with nothing else: the verdict is none, the gap at the floor.
             self.assertEqual(doc["verdict"], ["none"])
             self.assertLess(doc["gap_before_rmse_n"], 1.3 * doc["floor"]["total_n"])
+            # None is named: the report says from which wheel inertia these runs could show one.
+            self.assertGreater(doc["inertia_reach_kgm2"], 0)
+            self.assertTrue(any("could show one only from about" in n for n in doc["notes"]),
+                            doc["notes"])
 
 
 class Gap(unittest.TestCase):
@@ -116,6 +120,10 @@ class Gap(unittest.TestCase):
             self.assertEqual(doc["gates"]["min_gap_over_floor"], 0.9)
             self.assertGreater(doc["gap_before_rmse_n"], doc["noise_n"])
             self.assertLess(doc["gap_after_rmse_n"], 1.5 * doc["noise_n"])
+            # An inertia is named in these runs: no reach is given.
+            self.assertIn("wheel_inertia", doc["verdict"])
+            self.assertIsNone(doc["inertia_reach_kgm2"])
+            self.assertFalse(any("could show one only from about" in n for n in doc["notes"]))
             with open(os.path.join(d, "index.html")) as f:
                 html = f.read()
             self.assertIn("Condition <b>roller</b>", html)
