@@ -121,17 +121,17 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   std::map<std::string, std::pair<int, int>> by_vehicle;  // right (named or none), all
   int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0,
       none_exact = 0, refused = 0;
-  // A wheel's inertia missed, and how many of those sets' runs could not have shown it (the
-  // truth below the smallest inertia the report says they could show).
-  int inertia_missed = 0, inertia_missed_below_reach = 0;
+  // Each effect's misses, and how many of those sets' runs could not have shown it (the truth
+  // below the smallest magnitude the report says they could show).
+  std::map<std::string, std::pair<int, int>> missed;  // missed, of them below the reach
   for (std::size_t k = 0; k < results.size(); ++k) {
     const auto& r = results[k];
     const auto& inj = r.truth;
     const std::string said = r.verdict.empty() ? "?" : r.verdict.front();
     ++confusion[inj.effect][said];
-    if (inj.effect == "wheel_inertia" && !r.correct()) {
-      ++inertia_missed;
-      if (inj.magnitude < r.inertia_reach_kgm2) ++inertia_missed_below_reach;
+    if (inj.effect != "none" && !r.correct()) {
+      ++missed[inj.effect].first;
+      if (std::abs(inj.magnitude) < r.reach) ++missed[inj.effect].second;
     }
     const double floor_n = std::max(r.noise_n, 1e-9);
     const double ratio = r.gap_after_n / floor_n, before_ratio = r.gap_before_n / floor_n;
@@ -250,13 +250,11 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
         100 * quantile(load_ratio_err, 0.5), 100 * quantile(load_ratio_err, 0.9),
         load_ratio_err.size());
   }
-  if (inertia_missed > 0) {
-    j["wheel_inertia_missed"] = {{"sets", inertia_missed},
-                                 {"below_reach", inertia_missed_below_reach}};
+  for (const auto& [e, m] : missed) {
+    j["missed"][e] = {{"sets", m.first}, {"below_reach", m.second}};
     std::cout << fmt::format(
-        "wheel_inertia missed in {} sets, {} of them below the smallest inertia their runs could "
-        "show\n",
-        inertia_missed, inertia_missed_below_reach);
+        "{} missed in {} sets, {} of them below the smallest magnitude their runs could show\n", e,
+        m.first, m.second);
   }
   j["gap_after_over_noise"] = {{"median", quantile(after_over_noise, 0.5)},
                                {"p90", quantile(after_over_noise, 0.9)}};

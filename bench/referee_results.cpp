@@ -144,14 +144,23 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
     out += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(), trials, gates,
                        each);
   }
-  for (const auto& r : rows)
-    if (r.contains("wheel_inertia_missed"))
-      out += fmt::format(
-          "\n{} {}, gates {}: a wheel's inertia missed in {} sets, {} of them below the smallest "
-          "inertia their runs could show (the report's note where none is named).\n",
-          r["condition"].get<std::string>(), r["trial_generator"].get<std::string>(),
-          r["gate_generator"].get<std::string>(), r["wheel_inertia_missed"]["sets"].get<int>(),
-          r["wheel_inertia_missed"]["below_reach"].get<int>());
+  // Each row's misses: how many lay below the smallest magnitude their runs could show.
+  bool any_missed = false;
+  for (const auto& r : rows) any_missed |= r.contains("missed");
+  if (any_missed)
+    out +=
+        "\nSingle effects missed, and of them below the smallest magnitude their runs could show "
+        "(the report's reach, where the effect is not named):\n\n";
+  for (const auto& r : rows) {
+    if (!r.contains("missed")) continue;
+    std::string each;
+    for (const auto& [e, v] : r["missed"].items())
+      each += fmt::format("{}{} {} of {}", each.empty() ? "" : "; ", e, v["below_reach"].get<int>(),
+                          v["sets"].get<int>());
+    out += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
+                       r["trial_generator"].get<std::string>(),
+                       r["gate_generator"].get<std::string>(), each);
+  }
   return out;
 }
 

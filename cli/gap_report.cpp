@@ -93,9 +93,11 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
   j["gap_after_rmse_n"] = num(r.gap_after_rmse_n);
   j["fraction_explained"] =
       num(r.gap_before_rmse_n > 0 ? 1.0 - r.gap_after_rmse_n / r.gap_before_rmse_n : 0.0);
-  // Where no wheel inertia is named: the smallest its runs could have shown, kg m^2 (null: named,
-  // or none could be shown at all).
-  j["inertia_reach_kgm2"] = num(r.inertia_reach_kgm2);
+  // For each one-parameter candidate not named: the smallest magnitude the runs could have
+  // shown, keyed by effect, in its parameter's unit (null: nothing of it could be shown).
+  j["reach"] = nlohmann::ordered_json::object();
+  for (const auto& x : r.reach)
+    j["reach"][gap::to_string(x.effect)] = {{gap::effect_param(x.effect).name, num(x.smallest)}};
   j["parameters_before"] = params_json(r.before, r.baseline_effects);
   j["parameters_after"] = params_json(r.after, r.accepted);
   j["notes"] = r.notes;

@@ -155,7 +155,8 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   estimate(inj.effect, t.estimate);
   if (inj.pair()) estimate(inj.effect2, t.estimate2);
   t.gap_before_n = rep.gap_before_rmse_n;
-  t.inertia_reach_kgm2 = rep.inertia_reach_kgm2;
+  for (const auto& r : rep.reach)
+    if (inj.effect == gap::to_string(r.effect)) t.reach = r.smallest;
   t.gap_after_n = rep.gap_after_rmse_n;
   t.noise_n = rep.noise_n;
   return t;

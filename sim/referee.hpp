@@ -95,8 +95,9 @@ struct TrialResult {
   /// Load transfer's dFz/Fz per m/s^2 where it was named (NaN: not named).
   double load_per_decel_estimate = NAN;
   double gap_before_n = 0.0, gap_after_n = 0.0, noise_n = 0.0;
-  /// Where no wheel inertia was named: the smallest its runs could have shown (NaN: named).
-  double inertia_reach_kgm2 = NAN;
+  /// Where the injected effect was not named: the smallest magnitude its runs could have shown,
+  /// in its parameter's unit (NaN: named, or no reach for it).
+  double reach = NAN;
   /// The set's runs share one speed (A's runs; B's and C's roller runs): there a relaxation
   /// (sigma / V) and a time offset are one lag, and either name counts for the other.
   bool one_speed = false;

@@ -235,13 +235,14 @@ Report diagnose_runs(const std::vector<Run>& runs_in, const MfParams& start, con
         "curve as a function of slip alone: a tyre whose curve is not a Magic Formula can look "
         "like it (checked here: its stiffness ratio is inside its range); roller runs without "
         "deceleration (--roller/--road) separate the two");
-  if (std::find(rep.accepted.begin(), rep.accepted.end(), Effect::WheelInertia) ==
-      rep.accepted.end()) {
-    const InertiaReach reach =
-        inertia_reach(runs, rep.before.params, rep.baseline_effects, rep.noise_n, o.gate_gain);
-    rep.inertia_reach_kgm2 = reach.smallest_kgm2;
-    if (std::string note = inertia_reach_note(reach); !note.empty()) rep.notes.push_back(note);
-  }
+  std::vector<Effect> not_named;
+  for (Effect e : candidates)
+    if (std::find(rep.accepted.begin(), rep.accepted.end(), e) == rep.accepted.end())
+      not_named.push_back(e);
+  rep.reach = effect_reach(runs, rep.before.params, rep.baseline_effects, not_named, rep.noise_n,
+                           o.gate_gain);
+  if (std::string note = reach_note(rep.reach, max_wheel_decel_mps2(runs)); !note.empty())
+    rep.notes.push_back(note);
   if (std::string note = borrowed_noise_note(rep.floor); !note.empty()) rep.notes.push_back(note);
   // (With a cap found from the runaway the fits are of the runs below it: no spread is given.)
   if (!cap && std::any_of(rep.accepted.begin(), rep.accepted.end(),

@@ -299,6 +299,12 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
 /// The report's note on the runs that borrowed their slip noise (empty: none did).
 std::string borrowed_noise_note(const Floor& fl);
 
+/// The smallest magnitude of an effect a set's runs could show (Report::reach).
+struct EffectReach {
+  Effect effect{};
+  double smallest = INFINITY;  ///< in the effect's parameter's unit (effect_param)
+};
+
 struct Report {
   std::vector<std::string> verdict;
   std::vector<EffectScore> effects;  ///< first round: every candidate alone on the baseline
@@ -319,9 +325,9 @@ struct Report {
   /// A force cap found on the runs (roller cradle): from the runaway at one force, or the fitted
   /// cradle_cap effect; NaN when none.
   double cap_n = NAN;
-  /// Where no wheel inertia is named (model vs measurement): the smallest one these runs could
-  /// have shown, in kg m^2 (infinite: none; NaN: not measured).
-  double inertia_reach_kgm2 = NAN;
+  /// Model vs measurement: for each one-parameter candidate not named, the smallest magnitude
+  /// (in its parameter's unit) these runs could have shown (infinite: none).
+  std::vector<EffectReach> reach;
 };
 
 /// A force cap on the roller (the cradle's Fz sin beta): every run ran away at one force (within

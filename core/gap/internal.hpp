@@ -185,18 +185,18 @@ MfParams neutral_start(const std::vector<Run>& runs);
 /// the vehicle's mass and the runs' wheel load, h/L = 2 Fz (dFz/Fz per m/s^2) / m.
 void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
                            const Options& o);
-/// From which wheel inertia a set's runs could show one (inertia_reach.cpp): the inertia whose
-/// force, I a / R^2, beyond what the baseline's parameters take (their least-squares projection)
-/// would lower a gap of the noise floor alone by the gain gate. Infinite where the runs hold no
-/// deceleration the curve cannot take.
-struct InertiaReach {
-  double smallest_kgm2 = INFINITY;
-  double max_decel_mps2 = 0.0;  ///< the wheel's largest deceleration in the runs
-};
-InertiaReach inertia_reach(const std::vector<Run>& runs, const std::vector<double>& params,
-                           const std::vector<Effect>& effects, double noise_n, double gate_gain);
-/// The report's note where no inertia is named (empty where the reach is infinite).
-std::string inertia_reach_note(const InertiaReach& reach);
+/// The smallest magnitude of each one-parameter candidate the runs could show (reach.cpp): its
+/// force per unit magnitude beyond what the baseline's parameters take (their least-squares
+/// projection), against the force that would lower a gap of the noise floor alone by the gain
+/// gate. Infinite where nothing of it is left beyond the curve.
+std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
+                                      const std::vector<double>& params,
+                                      const std::vector<Effect>& baseline,
+                                      const std::vector<Effect>& candidates, double noise_n,
+                                      double gate_gain);
+double max_wheel_decel_mps2(const std::vector<Run>& runs);
+/// The report's note on what the runs could show (empty where no reach is finite).
+std::string reach_note(const std::vector<EffectReach>& reach, double max_decel_mps2);
 /// Where a run is cut (runaway_cut.cpp): the number of its samples kept, up to the wheel's
 /// lock-up runaway (the slip jumps by more than runaway_slip_per_sample and stays up; on the
 /// ground not where the force channel falls with the tyre through it) or a locked wheel. Sets

@@ -78,9 +78,11 @@ class OthersEventFiles(unittest.TestCase):
             # A Magic Formula tyre with nothing else: the verdict is none, the gap at the floor.
             self.assertEqual(doc["verdict"], ["none"])
             self.assertLess(doc["gap_before_rmse_n"], 1.3 * doc["floor"]["total_n"])
-            # None is named: the report says from which wheel inertia these runs could show one.
-            self.assertGreater(doc["inertia_reach_kgm2"], 0)
-            self.assertTrue(any("could show one only from about" in n for n in doc["notes"]),
+            # None is named: the report says from which magnitude these runs could show each
+            # one-parameter effect, in its parameter's unit, in the JSON and in a note.
+            self.assertGreater(doc["reach"]["wheel_inertia"]["inertia_kgm2"], 0)
+            self.assertGreater(doc["reach"]["slip_offset"]["slip_offset_ratio"], 0)
+            self.assertTrue(any("wheel_inertia inertia_kgm2 from" in n for n in doc["notes"]),
                             doc["notes"])
 
 
@@ -120,10 +122,11 @@ class Gap(unittest.TestCase):
             self.assertEqual(doc["gates"]["min_gap_over_floor"], 0.9)
             self.assertGreater(doc["gap_before_rmse_n"], doc["noise_n"])
             self.assertLess(doc["gap_after_rmse_n"], 1.5 * doc["noise_n"])
-            # An inertia is named in these runs: no reach is given.
-            self.assertIn("wheel_inertia", doc["verdict"])
-            self.assertIsNone(doc["inertia_reach_kgm2"])
-            self.assertFalse(any("could show one only from about" in n for n in doc["notes"]))
+            # An effect named has no reach; each one-parameter candidate not named has one.
+            for name in doc["verdict"]:
+                self.assertNotIn(name, doc["reach"])
+            self.assertGreater(doc["reach"]["time_offset"]["dt_s"], 0)
+            self.assertNotIn("cradle_cap", doc["reach"])
             with open(os.path.join(d, "index.html")) as f:
                 html = f.read()
             self.assertIn("Condition <b>roller</b>", html)

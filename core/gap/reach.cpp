@@ -1,0 +1,115 @@
+// The smallest magnitude of each effect a set's runs could show. An effect is in the runs only
+// through its force beyond what the curve's own B, C, D, E can bend to take: a wheel's inertia
+// on a roller at 2-6 km/h, where the wheel decelerates little before it runs away, leaves almost
+// nothing else. Where an effect is not named, the report says from which magnitude it would have
+// been expected: a user then knows whether "none" rules it out.
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+
+namespace brakefit::gap {
+
+namespace {
+
+/// An effect's magnitude where it is absent (a relaxation's range starts just above zero).
+double absent_value(const EffectParam& p) {
+  return std::clamp(0.0, p.lo, p.hi);
+}
+
+/// The one-parameter effects a reach is given for (load transfer has its stiffness ratio and
+/// pitch too; a cradle cap is found from where the runs end, not as a small force).
+bool has_reach(Effect e) {
+  return effect_params(e).size() == 1 && e != Effect::CradleCap && !is_nuisance(e);
+}
+
+}  // namespace
+
+std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
+                                      const std::vector<double>& params,
+                                      const std::vector<Effect>& baseline,
+                                      const std::vector<Effect>& candidates, double noise_n,
+                                      double gate_gain) {
+  std::vector<EffectReach> out;
+  std::size_t n = 0;
+  for (const Run& r : runs) n += r.t_s.size();
+  const auto p_count = static_cast<Eigen::Index>(params.size());
+  if (n <= params.size() || noise_n <= 0 || gate_gain <= 0 || gate_gain >= 1) return out;
+  // The baseline's Jacobian, by central differences of its prediction.
+  Eigen::MatrixXd jac(static_cast<Eigen::Index>(n), p_count);
+  Eigen::Index row = 0;
+  for (const Run& r : runs) {
+    for (Eigen::Index j = 0; j < p_count; ++j) {
+      std::vector<double> hi = params, lo = params;
+      const double h = 1e-4 * std::max(std::abs(params[static_cast<std::size_t>(j)]), 1e-3);
+      hi[static_cast<std::size_t>(j)] += h;
+      lo[static_cast<std::size_t>(j)] -= h;
+      const std::vector<double> up = predict(r, hi, baseline), down = predict(r, lo, baseline);
+      for (std::size_t i = 0; i < up.size(); ++i)
+        jac(row + static_cast<Eigen::Index>(i), j) = (up[i] - down[i]) / (2 * h);
+    }
+    row += static_cast<Eigen::Index>(r.t_s.size());
+  }
+  const auto qr = jac.colPivHouseholderQr();
+  // A gap of the floor alone, plus the effect's remainder A: named where the held-out error falls
+  // by the gain gate, floor <= (1 - g) sqrt(floor^2 + A^2).
+  const double needed_n = noise_n * std::sqrt(1.0 / ((1 - gate_gain) * (1 - gate_gain)) - 1.0);
+  for (Effect e : candidates) {
+    if (!has_reach(e)) continue;
+    // The effect's force per unit of its magnitude: the secant from absent to a step of 1 % of
+    // its range's top (1 kg m^2, 0.3 bar, 3 ms, 0.02 m, 5e-4 of slip), the size it is sought at.
+    const EffectParam& p = effect_params(e).front();
+    const double off = absent_value(p), step = 0.01 * p.hi;
+    std::vector<Effect> with = baseline;
+    with.push_back(e);
+    std::vector<double> on = params, none = params;
+    on.push_back(off + step);
+    none.push_back(off);
+    Eigen::VectorXd unit(static_cast<Eigen::Index>(n));
+    row = 0;
+    for (const Run& r : runs) {
+      const std::vector<double> a = predict(r, on, with), b = predict(r, none, with);
+      for (std::size_t i = 0; i < a.size(); ++i)
+        unit(row + static_cast<Eigen::Index>(i)) = (a[i] - b[i]) / step;
+      row += static_cast<Eigen::Index>(r.t_s.size());
+    }
+    // What of it the curve cannot take: its residual after the least-squares projection on the
+    // baseline's parameters.
+    const Eigen::VectorXd taken = jac * qr.solve(unit);
+    const double left_rms = std::sqrt((unit - taken).squaredNorm() / static_cast<double>(n));
+    out.push_back({e, left_rms > 0 && std::isfinite(left_rms) ? needed_n / left_rms : INFINITY});
+  }
+  return out;
+}
+
+double max_wheel_decel_mps2(const std::vector<Run>& runs) {
+  double most = 0;
+  for (const Run& r : runs)
+    for (double a : r.wheel_accel_mps2) most = std::max(most, -a);
+  return most;
+}
+
+std::string reach_note(const std::vector<EffectReach>& reach, double max_decel_mps2) {
+  std::string each;
+  for (const EffectReach& r : reach) {
+    if (!std::isfinite(r.smallest)) continue;
+    const double v = r.smallest;
+    each += fmt::format("{}{} {} from {}", each.empty() ? "" : ", ", to_string(r.effect),
+                        effect_params(r.effect).front().name,
+                        v >= 10 ? fmt::format("{:.0f}", v) : fmt::format("{:.2g}", v));
+  }
+  if (each.empty()) return {};
+  return fmt::format(
+      "what these runs could show of each effect not named (its force beyond what the curve's B, "
+      "C, D, E take, against the gain gate over the noise floor): {}; the wheel decelerates at up "
+      "to {} m/s^2 before the runs end",
+      each,
+      max_decel_mps2 >= 10 ? fmt::format("{:.0f}", max_decel_mps2)
+                           : fmt::format("{:.2g}", max_decel_mps2));
+}
+
+}  // namespace brakefit::gap
