@@ -54,7 +54,17 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
     }
     row += static_cast<Eigen::Index>(r.t_s.size());
   }
-  const auto qr = jac.colPivHouseholderQr();
+  // Each candidate is scored with the tyre's own shift (a nuisance slip bias) and without it,
+  // which a slip offset replaces: its reach is the better of the two.
+  std::vector<Eigen::MatrixXd> bases{jac};
+  if (const auto shift = param_offset(baseline, Effect::TyreShift)) {
+    const auto at = static_cast<Eigen::Index>(*shift);
+    Eigen::MatrixXd without(jac.rows(), p_count - 1);
+    without << jac.leftCols(at), jac.rightCols(p_count - at - 1);
+    bases.push_back(std::move(without));
+  }
+  std::vector<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>> solvers;
+  for (const auto& b : bases) solvers.push_back(b.colPivHouseholderQr());
   // A gap of the floor alone, plus the effect's remainder A: named where the held-out error falls
   // by the gain gate, floor <= (1 - g) sqrt(floor^2 + A^2).
   const double needed_n = noise_n * std::sqrt(1.0 / ((1 - gate_gain) * (1 - gate_gain)) - 1.0);
@@ -79,8 +89,11 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
     }
     // What of it the curve cannot take: its residual after the least-squares projection on the
     // baseline's parameters.
-    const Eigen::VectorXd taken = jac * qr.solve(unit);
-    const double left_rms = std::sqrt((unit - taken).squaredNorm() / static_cast<double>(n));
+    double left_rms = 0;
+    for (std::size_t k = 0; k < bases.size(); ++k) {
+      const Eigen::VectorXd left = unit - bases[k] * solvers[k].solve(unit);
+      left_rms = std::max(left_rms, std::sqrt(left.squaredNorm() / static_cast<double>(n)));
+    }
     out.push_back({e, left_rms > 0 && std::isfinite(left_rms) ? needed_n / left_rms : INFINITY});
   }
   return out;
