@@ -64,6 +64,7 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
     bases.push_back(std::move(without));
   }
   std::vector<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>> solvers;
+  solvers.reserve(bases.size());
   for (const auto& b : bases) solvers.push_back(b.colPivHouseholderQr());
   // A gap of the floor alone, plus the effect's remainder A: named where the held-out error falls
   // by the gain gate, floor <= (1 - g) sqrt(floor^2 + A^2).
