@@ -54,13 +54,22 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
     }
     row += static_cast<Eigen::Index>(r.t_s.size());
   }
-  // Each candidate is scored with the tyre's own shift (a nuisance slip bias) and without it,
-  // which a slip offset replaces: its reach is the better of the two.
+  // Each candidate is scored with the baseline's nuisance slip bias (the tyre's own shift, or a
+  // quantised reference's bias) and, for the shift, without it. A slip offset is that bias
+  // beyond the bias's bound: against the basis without the nuisance, it shows past the bound.
   std::vector<Eigen::MatrixXd> bases{jac};
-  if (const auto shift = param_offset(baseline, Effect::TyreShift)) {
-    const auto at = static_cast<Eigen::Index>(*shift);
-    Eigen::MatrixXd without(jac.rows(), p_count - 1);
-    without << jac.leftCols(at), jac.rightCols(p_count - at - 1);
+  std::vector<Eigen::Index> keep{0, 1, 2, 3};
+  std::size_t at = 4;
+  for (Effect b : baseline) {
+    const std::size_t count = effect_params(b).size();
+    if (!is_nuisance(b))
+      for (std::size_t k = 0; k < count; ++k) keep.push_back(static_cast<Eigen::Index>(at + k));
+    at += count;
+  }
+  if (static_cast<Eigen::Index>(keep.size()) < p_count) {
+    Eigen::MatrixXd without(jac.rows(), static_cast<Eigen::Index>(keep.size()));
+    for (std::size_t k = 0; k < keep.size(); ++k)
+      without.col(static_cast<Eigen::Index>(k)) = jac.col(keep[k]);
     bases.push_back(std::move(without));
   }
   std::vector<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>> solvers;
@@ -90,12 +99,15 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
     }
     // What of it the curve cannot take: its residual after the least-squares projection on the
     // baseline's parameters.
-    double left_rms = 0;
+    const double past = e == Effect::SlipOffset ? nuisance_bias_bound(pointers(runs), with) : 0.0;
+    double smallest = INFINITY;
     for (std::size_t k = 0; k < bases.size(); ++k) {
       const Eigen::VectorXd left = unit - bases[k] * solvers[k].solve(unit);
-      left_rms = std::max(left_rms, std::sqrt(left.squaredNorm() / static_cast<double>(n)));
+      const double left_rms = std::sqrt(left.squaredNorm() / static_cast<double>(n));
+      if (left_rms > 0 && std::isfinite(left_rms))
+        smallest = std::min(smallest, (k > 0 ? past : 0.0) + needed_n / left_rms);
     }
-    out.push_back({e, left_rms > 0 && std::isfinite(left_rms) ? needed_n / left_rms : INFINITY});
+    out.push_back({e, smallest});
   }
   return out;
 }

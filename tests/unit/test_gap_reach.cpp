@@ -53,6 +53,12 @@ TEST(GapReach, TheRollerHidesAnInertiaTheRoadShows) {
   for (auto e : {gap::Effect::RelaxationLength, gap::Effect::TimeOffset,
                  gap::Effect::BrakeThreshold, gap::Effect::SlipOffset, gap::Effect::SpeedFriction})
     EXPECT_GT(reach_of(roller.reach, e), 0.0) << gap::to_string(e);
+  // A slip offset is the nuisance slip bias beyond its bound: it shows past that bound, not
+  // never (both add to the same slip).
+  const double offset = reach_of(roller.reach, gap::Effect::SlipOffset);
+  EXPECT_GE(offset, gap::nuisance_bias_bound(gap::pointers(null_runs(can::BenchKind::Roller, 77)),
+                                             {gap::Effect::SlipOffset}));
+  EXPECT_LT(offset, 0.005);
   EXPECT_TRUE(std::isnan(reach_of(roller.reach, gap::Effect::CradleCap)));
   EXPECT_TRUE(std::isnan(reach_of(ground.reach, gap::Effect::LoadTransfer)));
   EXPECT_TRUE(std::any_of(roller.notes.begin(), roller.notes.end(), [](const std::string& n) {
