@@ -123,15 +123,20 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
       none_exact = 0, refused = 0;
   // Each effect's misses, and how many of those sets' runs could not have shown it (the truth
   // below the smallest magnitude the report says they could show).
-  std::map<std::string, std::pair<int, int>> missed;  // missed, of them below the reach
+  struct Missed {
+    int sets = 0, with_reach = 0, below_reach = 0;
+  };
+  std::map<std::string, Missed> missed;  // load transfer and a cradle cap have no reach
   for (std::size_t k = 0; k < results.size(); ++k) {
     const auto& r = results[k];
     const auto& inj = r.truth;
     const std::string said = r.verdict.empty() ? "?" : r.verdict.front();
     ++confusion[inj.effect][said];
     if (inj.effect != "none" && !r.correct()) {
-      ++missed[inj.effect].first;
-      if (std::abs(inj.magnitude) < r.reach) ++missed[inj.effect].second;
+      Missed& m = missed[inj.effect];
+      ++m.sets;
+      if (!std::isnan(r.reach)) ++m.with_reach;
+      if (std::abs(inj.magnitude) < r.reach) ++m.below_reach;
     }
     const double floor_n = std::max(r.noise_n, 1e-9);
     const double ratio = r.gap_after_n / floor_n, before_ratio = r.gap_before_n / floor_n;
@@ -251,10 +256,12 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
         load_ratio_err.size());
   }
   for (const auto& [e, m] : missed) {
-    j["missed"][e] = {{"sets", m.first}, {"below_reach", m.second}};
+    j["missed"][e] = {
+        {"sets", m.sets}, {"with_reach", m.with_reach}, {"below_reach", m.below_reach}};
     std::cout << fmt::format(
-        "{} missed in {} sets, {} of them below the smallest magnitude their runs could show\n", e,
-        m.first, m.second);
+        "{} missed in {} sets, {} of them below the smallest magnitude their runs could show{}\n",
+        e, m.sets, m.below_reach,
+        m.with_reach < m.sets ? fmt::format(" ({} without a reach)", m.sets - m.with_reach) : "");
   }
   j["gap_after_over_noise"] = {{"median", quantile(after_over_noise, 0.5)},
                                {"p90", quantile(after_over_noise, 0.9)}};

@@ -154,9 +154,12 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
   for (const auto& r : rows) {
     if (!r.contains("missed")) continue;
     std::string each;
-    for (const auto& [e, v] : r["missed"].items())
-      each += fmt::format("{}{} {} of {}", each.empty() ? "" : "; ", e, v["below_reach"].get<int>(),
-                          v["sets"].get<int>());
+    for (const auto& [e, v] : r["missed"].items()) {
+      const int sets = v["sets"].get<int>(), without = sets - v["with_reach"].get<int>();
+      each +=
+          fmt::format("{}{} {} of {}{}", each.empty() ? "" : "; ", e, v["below_reach"].get<int>(),
+                      sets, without > 0 ? fmt::format(" ({} without a reach)", without) : "");
+    }
     out += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
                        r["trial_generator"].get<std::string>(),
                        r["gate_generator"].get<std::string>(), each);
