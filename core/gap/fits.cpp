@@ -59,6 +59,18 @@ class GapProblem final : public fit::LeastSquaresProblem {
 
 }  // namespace
 
+Eigen::MatrixXd prediction_jacobian(const std::vector<const Run*>& runs,
+                                    const std::vector<double>& params,
+                                    const std::vector<Effect>& effects) {
+  const GapProblem problem(runs, effects);
+  Eigen::VectorXd res(problem.residual_count());
+  Eigen::MatrixXd jac(problem.residual_count(), static_cast<Eigen::Index>(params.size()));
+  problem.evaluate(
+      Eigen::Map<const Eigen::VectorXd>(params.data(), static_cast<Eigen::Index>(params.size())),
+      res, &jac);
+  return jac;
+}
+
 namespace {
 
 struct ParamRange {

@@ -2,6 +2,7 @@
 // Helpers shared by the diagnosis's own files (effects, fits, selection, cradle cap, the two
 // modes); not part of the public interface in gap.hpp. The channels' own (smoothing, clocks,
 // quantisation, droop, ripple, levelling) are channels.hpp's.
+#include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <functional>
@@ -52,6 +53,11 @@ std::vector<Effect> named_effects(const std::vector<Effect>& model);
 /// The slip bias the nuisance terms of a model may take: half a quantisation step of a constant
 /// reference, and the tyre's shift when the model carries it (unless slip_offset takes it).
 double nuisance_bias_bound(const std::vector<const Run*>& runs, const std::vector<Effect>& model);
+/// d predict / d params over the runs' points, stacked run after run (the fits' own central
+/// differences).
+Eigen::MatrixXd prediction_jacobian(const std::vector<const Run*>& runs,
+                                    const std::vector<double>& params,
+                                    const std::vector<Effect>& effects);
 /// The fit's tyre shift (0 without one) is strictly inside its bound: a foot further off is an
 /// effect's (a brake threshold, a slip offset), not the tyre's shift.
 bool tyre_shift_inside(const Fit& f, const std::vector<Effect>& model,

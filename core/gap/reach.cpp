@@ -39,21 +39,7 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
   for (const Run& r : runs) n += r.t_s.size();
   const auto p_count = static_cast<Eigen::Index>(params.size());
   if (n <= params.size() || noise_n <= 0 || gate_gain <= 0 || gate_gain >= 1) return out;
-  // The baseline's Jacobian, by central differences of its prediction.
-  Eigen::MatrixXd jac(static_cast<Eigen::Index>(n), p_count);
-  Eigen::Index row = 0;
-  for (const Run& r : runs) {
-    for (Eigen::Index j = 0; j < p_count; ++j) {
-      std::vector<double> hi = params, lo = params;
-      const double h = 1e-4 * std::max(std::abs(params[static_cast<std::size_t>(j)]), 1e-3);
-      hi[static_cast<std::size_t>(j)] += h;
-      lo[static_cast<std::size_t>(j)] -= h;
-      const std::vector<double> up = predict(r, hi, baseline), down = predict(r, lo, baseline);
-      for (std::size_t i = 0; i < up.size(); ++i)
-        jac(row + static_cast<Eigen::Index>(i), j) = (up[i] - down[i]) / (2 * h);
-    }
-    row += static_cast<Eigen::Index>(r.t_s.size());
-  }
+  const Eigen::MatrixXd jac = prediction_jacobian(pointers(runs), params, baseline);
   // Each candidate is scored with the baseline's nuisance slip bias (the tyre's own shift, or a
   // quantised reference's bias) and, for the shift, without it. A slip offset is that bias
   // beyond the bias's bound: against the basis without the nuisance, it shows past the bound.
@@ -90,7 +76,7 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
     on.push_back(off + step);
     none.push_back(off);
     Eigen::VectorXd unit(static_cast<Eigen::Index>(n));
-    row = 0;
+    Eigen::Index row = 0;
     for (const Run& r : runs) {
       const std::vector<double> a = predict(r, on, with), b = predict(r, none, with);
       for (std::size_t i = 0; i < a.size(); ++i)
