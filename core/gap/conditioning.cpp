@@ -63,6 +63,36 @@ constexpr double kHeldRollerSteps = 5.0;
 /// few 0.01 bar to the fits (generator A's null BIC drops 6.7 -> 25).
 constexpr double kRestPressureBar = 0.2;
 
+/// A wheel that stepped down this shortly before its run starts, to a level this many
+/// quantisation steps below its mean at rest, was braked before the pressure channel showed it (a
+/// late channel): its run starts on its way down, not at rest. (An encoder's ripple dithering
+/// between two levels puts the mean half a step from either; a free-rolling wheel drifting a
+/// level down 98 ms before a dead zone's run is at rest.)
+constexpr double kLeftRestSteps = 0.75;
+constexpr double kLeftRestWithinS = 0.06;
+
+/// Whether the wheel left its rest level in the lead-in's rest part (see kLeftRestSteps).
+static bool left_rest_in_lead_in(std::span<const pipeline::Sample> rest, double step_mps) {
+  double sum = 0;
+  int n = 0;
+  const pipeline::Sample* last_step = nullptr;  // the sample after the last change of level
+  const pipeline::Sample* prev = nullptr;
+  bool stepped_down = false;
+  for (const pipeline::Sample& s : rest) {
+    if (!(s.v_ref_mps >= kMinRefSpeedMps) || !std::isfinite(s.v_wheel_mps)) continue;
+    sum += s.v_wheel_mps;
+    ++n;
+    if (prev && s.v_wheel_mps != prev->v_wheel_mps) {
+      last_step = &s;
+      stepped_down = s.v_wheel_mps < prev->v_wheel_mps;
+    }
+    prev = &s;
+  }
+  if (!last_step || !stepped_down) return false;
+  return prev->v_wheel_mps < sum / n - kLeftRestSteps * step_mps &&
+         static_cast<double>(prev->t_ns - last_step->t_ns) * 1e-9 <= kLeftRestWithinS;
+}
+
 /// The smoother's half window spans at most this long: 10 samples at 500 Hz and up; at 100 Hz
 /// ten samples (0.1 s each side) would bend a 0.35 s ramp's kinks into structure no effect
 /// explains (a null generator C ground set read `unexplained` at a floor of 15 N).
@@ -209,7 +239,12 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     }
   // A roller's wheel held on one level before it slows (rolling free while the pressure rises
   // through a dead zone): where its level is, and when it first left it (hold_rest_at_foot).
-  if (c.bench == can::BenchKind::Roller && wheel_noise.step > 0)
+  // Only a level the wheel held at rest: a wheel that left its rest level in the lead-in (its
+  // brake bit before the pressure channel showed it, a late channel) starts the run on its way
+  // down, and a rest placed at the foot there holds its slip while the force rises (a 44 ms lag
+  // left a 100 N kink at each run's start that no effect explains).
+  if (c.bench == can::BenchKind::Roller && wheel_noise.step > 0 &&
+      !left_rest_in_lead_in(std::span(e.lead_in).first(rest), wheel_noise.step))
     for (std::size_t i = 1; i < v_wheel.size(); ++i)
       if (v_wheel[i] != v_wheel[i - 1]) {
         if (v_wheel[i] < v_wheel[i - 1]) {  // slowing (a first flip upwards is ripple or noise)

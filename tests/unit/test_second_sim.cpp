@@ -365,3 +365,17 @@ TEST(SecondSim, ARelaxingTyreStartsRollingFreelyAndDoesNotRing) {
     EXPECT_LT(hi - lo, 0.01) << "the wheel rings before the pedal";
   }
 }
+
+TEST(SecondSim, AWheelThatLeftItsRestBeforeALateChannelRoseIsNotHeldAtTheFoot) {
+  // A 44 ms late pressure channel on B's roller: the wheel steps off its rest level in the
+  // lead-in, before the channel shows the brake, and the run starts on the next level down. That
+  // level was taken for the wheel's rest at the curve's foot and its slip held there while the
+  // force rose: a 100 N kink at each run's start, the verdict `time_offset, unexplained` with
+  // 3.1x the floor left.
+  const sim::Injection inj{"time_offset", 0.0438, gap::Condition::Roller, sim::Generator::B};
+  const auto t = sim::run_trial(inj, 701009, gap::calibrated_options(gap::Condition::Roller));
+  ASSERT_FALSE(t.verdict.empty());
+  EXPECT_EQ(t.verdict, std::vector<std::string>{"time_offset"});
+  EXPECT_NEAR(t.estimate, 0.0438, 0.1 * 0.0438);
+  EXPECT_LT(t.gap_after_n, 1.5 * t.noise_n);
+}
