@@ -45,6 +45,8 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
   // Per effect: in how many pairs it was drawn and named; its magnitude error where named.
   std::map<std::string, int> drawn, named;
   std::map<std::string, std::vector<double>> err;
+  // Per effect not named by its own name: with a reach, and below it (beside the effects named).
+  std::map<std::string, std::pair<int, int>> not_named;
   std::vector<double> load_ratio_err;  // load transfer as dFz/Fz per m/s^2, where named
   for (std::size_t k = 0; k < results.size(); ++k) {
     const auto& r = results[k];
@@ -52,12 +54,17 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
     both += r.correct();
     exact += r.exact();
     refused += !r.verdict.empty() && r.verdict.front() == "refused";
-    for (const auto& [e, m, est] : {std::tuple{inj.effect, inj.magnitude, r.estimate},
-                                    std::tuple{inj.effect2, inj.magnitude2, r.estimate2}}) {
+    for (const auto& [e, m, est, reach] :
+         {std::tuple{inj.effect, inj.magnitude, r.estimate, r.reach},
+          std::tuple{inj.effect2, inj.magnitude2, r.estimate2, r.reach2}}) {
       ++drawn[e];
       const bool said = std::find(r.verdict.begin(), r.verdict.end(), e) != r.verdict.end();
       named[e] += said;
       if (said && std::isfinite(est)) err[e].push_back(std::abs(est - m) / std::abs(m));
+      if (!said) {
+        not_named[e].first += !std::isnan(reach);
+        not_named[e].second += std::abs(m) < reach;
+      }
     }
     if (std::isfinite(r.load_per_decel_estimate) && std::isfinite(inj.load_per_decel))
       load_ratio_err.push_back(std::abs(r.load_per_decel_estimate / inj.load_per_decel - 1));
@@ -75,13 +82,17 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
       "\npairs: both named {}/{} ({:.1f} %), exactly the two {}/{}, refused {}\n", both, n,
       100.0 * both / std::max(1, n), exact, n, refused);
   std::cout << "\n| effect in a pair | drawn | named | magnitude error where named: median, p90 "
-               "|\n|---|---|---|---|\n";
+               "| not named: below what the runs could show beside the effects named "
+               "|\n|---|---|---|---|---|\n";
   for (const auto& [e, d] : drawn) {
     const auto& v = err[e];
-    std::cout << fmt::format("| {} | {} | {} | {:.1f} %, {:.1f} % |\n", e, d, named[e],
-                             100 * quantile(v, 0.5), 100 * quantile(v, 0.9));
+    std::cout << fmt::format("| {} | {} | {} | {:.1f} %, {:.1f} % | {} of {} |\n", e, d, named[e],
+                             100 * quantile(v, 0.5), 100 * quantile(v, 0.9), not_named[e].second,
+                             d - named[e]);
     j["pair_effects"][e] = {{"drawn", d},
                             {"named", named[e]},
+                            {"not_named_with_reach", not_named[e].first},
+                            {"not_named_below_reach", not_named[e].second},
                             {"magnitude_error_named_median", quantile(v, 0.5)},
                             {"magnitude_error_named_p90", quantile(v, 0.9)}};
   }

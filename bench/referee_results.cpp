@@ -103,6 +103,30 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
       out += row_name(r) + fmt::format("| {} | {} | {} |\n", share(c, "pairs_both", "pairs"),
                                        share(c, "pairs_exact", "pairs"), each);
     }
+    // Each effect not named in its pair: how many lay below what the runs could show beside
+    // the effects that were.
+    std::string lines;
+    for (const auto& r : rows) {
+      if (!r["counts"].contains("pairs")) continue;
+      std::string each;
+      for (const auto& [e, v] : r["pair_effects"].items()) {
+        const int missed = v["drawn"].get<int>() - v["named"].get<int>();
+        if (missed == 0 || !v.contains("not_named_below_reach")) continue;
+        const int without = missed - v["not_named_with_reach"].get<int>();
+        each += fmt::format("{}{} {} of {}{}", each.empty() ? "" : "; ", e,
+                            v["not_named_below_reach"].get<int>(), missed,
+                            without > 0 ? fmt::format(" ({} without a reach)", without) : "");
+      }
+      if (!each.empty())
+        lines += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
+                             r["trial_generator"].get<std::string>(),
+                             r["gate_generator"].get<std::string>(), each);
+    }
+    if (!lines.empty())
+      out +=
+          "\nEffects of a pair not named by their own name, and of them below the smallest "
+          "magnitude their runs could show beside the effects named (the report's reach):\n\n" +
+          lines;
   }
   bool detection = false;
   for (const auto& r : rows) detection |= r.contains("detection");

@@ -155,8 +155,13 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   estimate(inj.effect, t.estimate);
   if (inj.pair()) estimate(inj.effect2, t.estimate2);
   t.gap_before_n = rep.gap_before_rmse_n;
-  for (const auto& r : rep.reach)
-    if (inj.effect == gap::to_string(r.effect)) t.reach = r.smallest;
+  const bool named_any = std::any_of(rep.verdict.begin(), rep.verdict.end(), [](const auto& v) {
+    return v != "none" && v != "unexplained" && v != "refused";
+  });
+  for (const auto& r : rep.reach) {
+    if (inj.effect == gap::to_string(r.effect) && (inj.pair() || !named_any)) t.reach = r.smallest;
+    if (inj.pair() && inj.effect2 == gap::to_string(r.effect)) t.reach2 = r.smallest;
+  }
   t.gap_after_n = rep.gap_after_rmse_n;
   t.noise_n = rep.noise_n;
   return t;

@@ -95,9 +95,11 @@ struct TrialResult {
   /// Load transfer's dFz/Fz per m/s^2 where it was named (NaN: not named).
   double load_per_decel_estimate = NAN;
   double gap_before_n = 0.0, gap_after_n = 0.0, noise_n = 0.0;
-  /// Where the injected effect was not named: the smallest magnitude its runs could have shown,
-  /// in its parameter's unit (NaN: named, or no reach for it).
-  double reach = NAN;
+  /// Where the injected effect was not named: the smallest magnitude its runs could have shown
+  /// beside the effects named, in its parameter's unit (NaN: named, or no reach for it; for a
+  /// single effect, also where another effect was named in its place: a reach beside a wrong
+  /// name says nothing of what the runs held). reach2: a pair's second effect's.
+  double reach = NAN, reach2 = NAN;
   /// The set's runs share one speed (A's runs; B's and C's roller runs): there a relaxation
   /// (sigma / V) and a time offset are one lag, and either name counts for the other.
   bool one_speed = false;

@@ -326,7 +326,8 @@ struct Report {
   /// cradle_cap effect; NaN when none.
   double cap_n = NAN;
   /// Model vs measurement: for each one-parameter candidate not named, the smallest magnitude
-  /// (in its parameter's unit) these runs could have shown (infinite: none).
+  /// (in its parameter's unit) these runs could have shown beside the effects named (infinite:
+  /// none).
   std::vector<EffectReach> reach;
 };
 

@@ -192,17 +192,20 @@ MfParams neutral_start(const std::vector<Run>& runs);
 void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
                            const Options& o);
 /// The smallest magnitude of each one-parameter candidate the runs could show (reach.cpp): its
-/// force per unit magnitude beyond what the baseline's parameters take (their least-squares
+/// force per unit magnitude beyond what the model's parameters take (their least-squares
 /// projection), against the force that would lower a gap of the noise floor alone by the gain
-/// gate. Infinite where nothing of it is left beyond the curve.
+/// gate. Infinite where nothing of it is left beyond the model. `model` is the baseline, or the
+/// baseline with the effects named (params: its fit's).
 std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
                                       const std::vector<double>& params,
-                                      const std::vector<Effect>& baseline,
+                                      const std::vector<Effect>& model,
                                       const std::vector<Effect>& candidates, double noise_n,
                                       double gate_gain);
 double max_wheel_decel_mps2(const std::vector<Run>& runs);
-/// The report's note on what the runs could show (empty where no reach is finite).
-std::string reach_note(const std::vector<EffectReach>& reach, double max_decel_mps2);
+/// The report's note on what the runs could show beside `model`'s effects (empty where no reach
+/// is finite).
+std::string reach_note(const std::vector<EffectReach>& reach, double max_decel_mps2,
+                       const std::vector<Effect>& model);
 /// Where a run is cut (runaway_cut.cpp): the number of its samples kept, up to the wheel's
 /// lock-up runaway (the slip jumps by more than runaway_slip_per_sample and stays up; on the
 /// ground not where the force channel falls with the tyre through it) or a locked wheel. Sets

@@ -31,7 +31,7 @@ bool has_reach(Effect e) {
 
 std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
                                       const std::vector<double>& params,
-                                      const std::vector<Effect>& baseline,
+                                      const std::vector<Effect>& model,
                                       const std::vector<Effect>& candidates, double noise_n,
                                       double gate_gain) {
   std::vector<EffectReach> out;
@@ -39,14 +39,14 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
   for (const Run& r : runs) n += r.t_s.size();
   const auto p_count = static_cast<Eigen::Index>(params.size());
   if (n <= params.size() || noise_n <= 0 || gate_gain <= 0 || gate_gain >= 1) return out;
-  const Eigen::MatrixXd jac = prediction_jacobian(pointers(runs), params, baseline);
-  // Each candidate is scored with the baseline's nuisance slip bias (the tyre's own shift, or a
+  const Eigen::MatrixXd jac = prediction_jacobian(pointers(runs), params, model);
+  // Each candidate is scored with the model's nuisance slip bias (the tyre's own shift, or a
   // quantised reference's bias) and, for the shift, without it. A slip offset is that bias
   // beyond the bias's bound: against the basis without the nuisance, it shows past the bound.
   std::vector<Eigen::MatrixXd> bases{jac};
   std::vector<Eigen::Index> keep{0, 1, 2, 3};
   std::size_t at = 4;
-  for (Effect b : baseline) {
+  for (Effect b : model) {
     const std::size_t count = effect_params(b).size();
     if (!is_nuisance(b))
       for (std::size_t k = 0; k < count; ++k) keep.push_back(static_cast<Eigen::Index>(at + k));
@@ -70,7 +70,7 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
     // its range's top (1 kg m^2, 0.3 bar, 3 ms, 0.02 m, 5e-4 of slip), the size it is sought at.
     const EffectParam& p = effect_params(e).front();
     const double off = absent_value(p), step = 0.01 * p.hi;
-    std::vector<Effect> with = baseline;
+    std::vector<Effect> with = model;
     with.push_back(e);
     std::vector<double> on = params, none = params;
     on.push_back(off + step);
@@ -83,8 +83,8 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
         unit(row + static_cast<Eigen::Index>(i)) = (a[i] - b[i]) / step;
       row += static_cast<Eigen::Index>(r.t_s.size());
     }
-    // What of it the curve cannot take: its residual after the least-squares projection on the
-    // baseline's parameters.
+    // What of it the model cannot take: its residual after the least-squares projection on the
+    // model's parameters (the curve's, the nuisances', the named effects').
     const double past = e == Effect::SlipOffset ? nuisance_bias_bound(pointers(runs), with) : 0.0;
     double smallest = INFINITY;
     for (std::size_t k = 0; k < bases.size(); ++k) {
@@ -105,7 +105,11 @@ double max_wheel_decel_mps2(const std::vector<Run>& runs) {
   return most;
 }
 
-std::string reach_note(const std::vector<EffectReach>& reach, double max_decel_mps2) {
+std::string reach_note(const std::vector<EffectReach>& reach, double max_decel_mps2,
+                       const std::vector<Effect>& model) {
+  std::string named;
+  for (Effect e : model)
+    if (!is_nuisance(e)) named += fmt::format("{}{}", named.empty() ? "" : ", ", to_string(e));
   std::string each;
   for (const EffectReach& r : reach) {
     if (!std::isfinite(r.smallest)) continue;
@@ -117,9 +121,9 @@ std::string reach_note(const std::vector<EffectReach>& reach, double max_decel_m
   if (each.empty()) return {};
   return fmt::format(
       "what these runs could show of each effect not named (its force beyond what the curve's B, "
-      "C, D, E take, against the gain gate over the noise floor): {}; the wheel decelerates at up "
-      "to {} m/s^2 before the runs end",
-      each,
+      "C, D, E{} take, against the gain gate over the noise floor): {}; the wheel decelerates at "
+      "up to {} m/s^2 before the runs end",
+      named.empty() ? "" : fmt::format(" and the named {}", named), each,
       max_decel_mps2 >= 10 ? fmt::format("{:.0f}", max_decel_mps2)
                            : fmt::format("{:.2g}", max_decel_mps2));
 }

@@ -98,3 +98,20 @@ TEST(GapReach, AnEffectNamedHasNoReach) {
   EXPECT_TRUE(std::isnan(reach_of(rep.reach, gap::Effect::WheelInertia)));
   EXPECT_GT(reach_of(rep.reach, gap::Effect::SlipOffset), 0.0);
 }
+
+TEST(GapReach, IsReadBesideTheEffectsNamed) {
+  // A 2.2 kg m^2 wheel behind a 44 ms late pressure channel: the channel never shows the wheel's
+  // last 44 ms before the runs end, where its inertia's force is. Against the baseline alone the
+  // reach read 0.5 kg m^2, as if the inertia should have shown; beside the named time offset it
+  // is above the truth, and the note says what it was read beside.
+  sim::Injection inj{"wheel_inertia", 2.22, gap::Condition::Roller, sim::Generator::B};
+  inj.effect2 = "time_offset";
+  inj.magnitude2 = 0.0438;
+  const auto t = sim::run_trial(inj, 701009, gap::calibrated_options(gap::Condition::Roller));
+  ASSERT_EQ(t.verdict, std::vector<std::string>{"time_offset"});
+  EXPECT_GT(t.reach, 2.22);
+  EXPECT_TRUE(std::isnan(t.reach2));  // named: no reach
+  EXPECT_TRUE(std::any_of(t.notes.begin(), t.notes.end(), [](const std::string& n) {
+    return n.find("C, D, E and the named time_offset take") != std::string::npos;
+  }));
+}
