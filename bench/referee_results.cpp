@@ -40,6 +40,14 @@ std::string row_name(const nlohmann::ordered_json& r) {
                      trials == gates ? "" : " (crossed)");
 }
 
+/// One effect's misses in a list: "name below of missed", and those without a reach.
+std::string misses_below_reach(const std::string& sep, const std::string& effect, int below,
+                               int missed, int with_reach) {
+  const int without = missed - with_reach;
+  return fmt::format("{}{} {} of {}{}", sep, effect, below, missed,
+                     without > 0 ? fmt::format(" ({} without a reach)", without) : "");
+}
+
 }  // namespace
 
 std::string source_commit() {
@@ -112,10 +120,9 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
       for (const auto& [e, v] : r["pair_effects"].items()) {
         const int missed = v["drawn"].get<int>() - v["named"].get<int>();
         if (missed == 0 || !v.contains("not_named_below_reach")) continue;
-        const int without = missed - v["not_named_with_reach"].get<int>();
-        each += fmt::format("{}{} {} of {}{}", each.empty() ? "" : "; ", e,
-                            v["not_named_below_reach"].get<int>(), missed,
-                            without > 0 ? fmt::format(" ({} without a reach)", without) : "");
+        each +=
+            misses_below_reach(each.empty() ? "" : "; ", e, v["not_named_below_reach"].get<int>(),
+                               missed, v["not_named_with_reach"].get<int>());
       }
       if (!each.empty())
         lines += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
@@ -178,12 +185,9 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
   for (const auto& r : rows) {
     if (!r.contains("missed")) continue;
     std::string each;
-    for (const auto& [e, v] : r["missed"].items()) {
-      const int sets = v["sets"].get<int>(), without = sets - v["with_reach"].get<int>();
-      each +=
-          fmt::format("{}{} {} of {}{}", each.empty() ? "" : "; ", e, v["below_reach"].get<int>(),
-                      sets, without > 0 ? fmt::format(" ({} without a reach)", without) : "");
-    }
+    for (const auto& [e, v] : r["missed"].items())
+      each += misses_below_reach(each.empty() ? "" : "; ", e, v["below_reach"].get<int>(),
+                                 v["sets"].get<int>(), v["with_reach"].get<int>());
     out += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
                        r["trial_generator"].get<std::string>(),
                        r["gate_generator"].get<std::string>(), each);

@@ -101,12 +101,17 @@ bool inseparable(const std::vector<std::string>& notes, const std::string& said,
   return false;
 }
 
+/// The verdict names no effect: `none` or `unexplained` (they come alone or after the names).
+bool names_no_effect(const std::vector<std::string>& verdict) {
+  return !verdict.empty() && (verdict.front() == "none" || verdict.front() == "unexplained");
+}
+
 }  // namespace
 
 bool TrialResult::correct() const {
   if (exact()) return true;
   if (truth.effect == "misspecified")  // never an invented effect
-    return !verdict.empty() && (verdict.front() == "none" || verdict.front() == "unexplained");
+    return names_no_effect(verdict);
   if (verdict.empty() || truth.effect == "none") return false;
   // The name v stands for the effect e: its own, the other lag at one speed, or noted inseparable.
   const auto names = [&](const std::string& v, const std::string& e) {
@@ -155,9 +160,7 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   estimate(inj.effect, t.estimate);
   if (inj.pair()) estimate(inj.effect2, t.estimate2);
   t.gap_before_n = rep.gap_before_rmse_n;
-  const bool named_any = std::any_of(rep.verdict.begin(), rep.verdict.end(), [](const auto& v) {
-    return v != "none" && v != "unexplained" && v != "refused";
-  });
+  const bool named_any = !rep.verdict.empty() && !names_no_effect(rep.verdict);
   for (const auto& r : rep.reach) {
     if (inj.effect == gap::to_string(r.effect) && (inj.pair() || !named_any)) t.reach = r.smallest;
     if (inj.pair() && inj.effect2 == gap::to_string(r.effect)) t.reach2 = r.smallest;

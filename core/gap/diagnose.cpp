@@ -240,17 +240,14 @@ Report diagnose_runs(const std::vector<Run>& runs_in, const MfParams& start, con
     if (std::find(rep.accepted.begin(), rep.accepted.end(), e) == rep.accepted.end())
       not_named.push_back(e);
   // Beside the effects named: what an effect must show is what the final model cannot take (a
-  // wheel's inertia beside a 44 ms late channel has lost the force of its last 44 ms before the
-  // runs end, and the baseline alone read it as visible from 0.5 kg m^2 where 2.2 left no gain).
-  // (With a cap found from the runaway the final model is of the runs below it: the baseline's.)
-  std::size_t after_count = 4;
-  for (Effect e : rep.accepted) after_count += effect_params(e).size();
-  const bool beside_named = !cap && rep.after.params.size() == after_count;
-  rep.reach = effect_reach(runs, beside_named ? rep.after.params : rep.before.params,
-                           beside_named ? rep.accepted : rep.baseline_effects, not_named,
-                           rep.noise_n, o.gate_gain);
-  if (std::string note = reach_note(rep.reach, max_wheel_decel_mps2(runs),
-                                    beside_named ? rep.accepted : rep.baseline_effects);
+  // named time offset takes the part of a wheel's inertia that a late channel still shows, and
+  // the channel never shows the rest: the wheel's last dt before the runs end). With a cap found
+  // from the runaway the final model is of the runs below it: the baseline's is read.
+  const bool beside_named = !cap && rep.after.params.size() == param_count(rep.accepted);
+  const std::vector<Effect>& reach_model = beside_named ? rep.accepted : rep.baseline_effects;
+  rep.reach = effect_reach(runs, beside_named ? rep.after.params : rep.before.params, reach_model,
+                           not_named, rep.noise_n, o.gate_gain);
+  if (std::string note = reach_note(rep.reach, max_wheel_decel_mps2(runs), reach_model);
       !note.empty())
     rep.notes.push_back(note);
   if (std::string note = borrowed_noise_note(rep.floor); !note.empty()) rep.notes.push_back(note);
