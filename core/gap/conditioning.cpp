@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <tuple>
 #include <utility>
 
@@ -18,7 +19,9 @@ namespace brakefit::gap {
 namespace {
 
 /// A drooping roller's rebuilt speed, and its droop kept for the runs that could not show it.
-void take_droop(Run& r, RollerDroop&& d) {
+void take_droop(Run& r, RollerDroop&& d, double step_mps, double roller_radius_m) {
+  r.roller_staircase = std::make_shared<const Run::RollerStaircase>(
+      Run::RollerStaircase{r.t_s, r.v_ref_mps, r.force_n, step_mps, roller_radius_m});
   r.v_ref_mps = std::move(d.v_ref_mps);
   r.roller_droop_mps_per_n = d.mps_per_n;
   r.roller_droop_lag_s = d.lag_s;
@@ -195,7 +198,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
         if (auto droop =
                 drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n, c.roller_radius_m, q);
             !droop.v_ref_mps.empty()) {
-          take_droop(full, std::move(droop));
+          take_droop(full, std::move(droop), q, c.roller_radius_m);
           ref_smooth = true;
         } else {
           double mean = 0;
@@ -216,7 +219,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
       if (auto droop =
               drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n, c.roller_radius_m, q);
           !droop.v_ref_mps.empty()) {
-        take_droop(full, std::move(droop));
+        take_droop(full, std::move(droop), q, c.roller_radius_m);
         ref_smooth = true;
       } else if (auto trend = held_roller_speed(full.t_s, full.v_ref_mps, c.roller_radius_m);
                  !trend.empty()) {
@@ -234,7 +237,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     if (auto droop = drooping_roller_speed(full.t_s, full.v_ref_mps, full.force_n,
                                            c.roller_radius_m, ref_noise.step);
         !droop.v_ref_mps.empty()) {
-      take_droop(full, std::move(droop));
+      take_droop(full, std::move(droop), ref_noise.step, c.roller_radius_m);
       ref_smooth = true;
     }
   // A roller's wheel held on one level before it slows (rolling free while the pressure rises
@@ -397,6 +400,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   r.roller_droop_mps_per_n = full.roller_droop_mps_per_n;
   r.roller_droop_lag_s = full.roller_droop_lag_s;
   r.roller_held_quantised = full.roller_held_quantised;
+  r.roller_staircase = full.roller_staircase;
   for (std::size_t i : idx) {
     r.t_s.push_back(full.t_s[i]);
     r.slip.push_back(full.slip[i]);

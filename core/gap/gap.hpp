@@ -119,6 +119,14 @@ struct Run {
   /// a droop under a step would not show (share_roller_droop).
   double roller_droop_mps_per_n = 0.0, roller_droop_lag_s = 0.0;
   bool roller_held_quantised = false;
+  /// A drooping roller's speed as the export read it (the staircase at the run's full rate, before
+  /// decimation) with the force it drooped under: the station's runs are fitted again together
+  /// (share_roller_droop), one drive behind one lag.
+  struct RollerStaircase {
+    std::vector<double> t_s, v_mps, force_n;
+    double step_mps = 0.0, roller_radius_m = 0.0;
+  };
+  std::shared_ptr<const RollerStaircase> roller_staircase;
   /// Per point: the standard deviation of the smoothed slip that the speed channels' noise
   /// leaves (errors in variables: through the local slope it is force noise the fit cannot remove).
   std::vector<double> slip_sd;

@@ -10,6 +10,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include "core/gap/internal.hpp"
 
@@ -53,26 +57,148 @@ std::vector<double> lagged_load(const std::vector<double>& t_s, const std::vecto
   return y;
 }
 
-struct Columns {
+/// The lagged force in kN (the droop's column: one drive loses the same speed per newton in every
+/// run of a station).
+std::vector<double> lagged_force_kn(const std::vector<double>& t_s, const std::vector<double>& f,
+                                    double tau_s) {
+  auto y = lagged_load(t_s, f, tau_s);
+  const double scale_kn = largest_force_n(f) * 1e-3;
+  for (double& x : y) x *= scale_kn;
+  return y;
+}
+
+/// One run's staircase as the fit reads it, and its columns: its own level, slow trend (u, u^2
+/// over the run) and ripple harmonics; the droop's column is shared.
+struct Stair {
+  const Run::RollerStaircase& s;
+  std::vector<std::size_t> at;  ///< the sample after each transition
+  double mean_mps = 0, span_s = 1;
   bool trend = false;
   int harmonics = 0;
-  Eigen::Index count() const { return 2 + (trend ? 2 : 0) + 2 * harmonics; }
+  Eigen::Index first_col = 0;  ///< its level's column
+  Eigen::Index count() const { return 1 + (trend ? 2 : 0) + 2 * harmonics; }
+  /// Its own columns' entries at time t and the droop's (in the shared column).
+  void fill(Eigen::MatrixXd& a, Eigen::Index row, double t, double load_kn) const {
+    const double u = (t - s.t_s.front()) / span_s;
+    a(row, 0) = load_kn;
+    Eigen::Index col = first_col;
+    a(row, col++) = 1;
+    if (trend) {
+      a(row, col++) = u;
+      a(row, col++) = u * u;
+    }
+    const double angle = mean_mps * (t - s.t_s.front()) / s.roller_radius_m;
+    for (int h = 1; h <= harmonics; ++h) {
+      a(row, col++) = std::cos(h * angle);
+      a(row, col++) = std::sin(h * angle);
+    }
+  }
 };
 
-/// One row: level, droop, [u, u^2], [ripple harmonics].
-void fill_row(Eigen::MatrixXd& a, Eigen::Index row, const Columns& c, double load, double u,
-              double angle) {
-  a(row, 0) = 1;
-  a(row, 1) = load;
-  Eigen::Index col = 2;
-  if (c.trend) {
-    a(row, col++) = u;
-    a(row, col++) = u * u;
+Stair read_stair(const Run::RollerStaircase& s) {
+  Stair out{s, {}, 0, 1, false, 0, 0};
+  const std::size_t n = s.t_s.size();
+  for (std::size_t i = 1; i < n; ++i)
+    if (s.v_mps[i] != s.v_mps[i - 1]) out.at.push_back(i);
+  for (double x : s.v_mps) out.mean_mps += x / static_cast<double>(n);
+  out.span_s = std::max(s.t_s.back() - s.t_s.front(), 1e-6);
+  out.trend = out.at.size() >= kTrendTransitions;
+  out.harmonics =
+      out.at.size() >= kRippleTransitions &&
+              out.mean_mps * out.span_s / (2 * M_PI * s.roller_radius_m) >= kHeldRollerMinTurns
+          ? 2
+          : 0;
+  return out;
+}
+
+/// The droop fitted to the transitions of one or more runs of a station (each row in the steps of
+/// its own channel): a level (trend, ripple) per run, one droop per kN behind one lag.
+struct DroopFit {
+  Eigen::VectorXd x;
+  double rss_steps2 = INFINITY, tau_s = 0;
+  Eigen::Index rows = 0;
+  double mps_per_kn() const { return x.size() ? -x(0) : 0.0; }
+  double miss_steps() const { return std::sqrt(rss_steps2 / static_cast<double>(rows)); }
+};
+
+DroopFit fit_droop(std::vector<Stair>& stairs) {
+  Eigen::Index cols = 1, rows = 0;
+  for (Stair& st : stairs) {
+    st.first_col = cols;
+    cols += st.count();
+    // One row more a run: the roller before the brake (its first level, at the load there)
+    // pins the level where a droop of a step or two crossed one boundary only.
+    rows += static_cast<Eigen::Index>(st.at.size()) + 1;
   }
-  for (int h = 1; h <= c.harmonics; ++h) {
-    a(row, col++) = std::cos(h * angle);
-    a(row, col++) = std::sin(h * angle);
+  DroopFit best;
+  best.rows = rows;
+  auto try_lag = [&](double tau_s) {
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(rows, cols);
+    Eigen::VectorXd b(rows);
+    Eigen::Index row = 0;
+    for (const Stair& st : stairs) {
+      const auto load = lagged_force_kn(st.s.t_s, st.s.force_n, tau_s);
+      const double w = 1 / st.s.step_mps;
+      for (const std::size_t i : st.at) {
+        st.fill(a, row, 0.5 * (st.s.t_s[i] + st.s.t_s[i - 1]), 0.5 * (load[i] + load[i - 1]));
+        b(row) = 0.5 * (st.s.v_mps[i] + st.s.v_mps[i - 1]);
+        a.row(row) *= w;
+        b(row++) *= w;
+      }
+      st.fill(a, row, st.s.t_s.front(), load.front());
+      b(row) = st.s.v_mps.front();
+      a.row(row) *= w;
+      b(row++) *= w;
+    }
+    const Eigen::VectorXd x = a.colPivHouseholderQr().solve(b);
+    const double rss = (a * x - b).squaredNorm();
+    if (rss < best.rss_steps2) {
+      best.rss_steps2 = rss;
+      best.x = x;
+      best.tau_s = tau_s;
+    }
+    return rss;
+  };
+  for (double tau_s : kDroopLags) try_lag(tau_s);
+  // The lag between the grid's neighbours of the best, by golden section: on a fast pedal ramp
+  // the drive's speed falls at up to 20 mm/s^2, and a lag 50 ms off puts the rebuilt speed a
+  // millimetre per second off (a slip error of 1e-3 at 4 km/h, more than a wheel's inertia leaves).
+  const auto it = std::find(kDroopLags.begin(), kDroopLags.end(), best.tau_s);
+  double lo = it == kDroopLags.begin() ? kDroopLags.front() : *(it - 1);
+  double hi = it + 1 == kDroopLags.end() ? kDroopLags.back() : *(it + 1);
+  constexpr double kGolden = 0.6180339887498949;
+  double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
+  double f1 = try_lag(x1), f2 = try_lag(x2);
+  for (int k = 0; k < kDroopLagRefinements; ++k) {
+    if (f1 < f2) {
+      hi = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = hi - kGolden * (hi - lo);
+      f1 = try_lag(x1);
+    } else {
+      lo = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = lo + kGolden * (hi - lo);
+      f2 = try_lag(x2);
+    }
   }
+  return best;
+}
+
+/// A run's speed rebuilt from the fit: its level and trend, less the shared droop (its ripple is
+/// the encoder's, not the roller's, and stays out).
+std::vector<double> rebuilt_speed(const Stair& st, const DroopFit& fit) {
+  const auto load = lagged_force_kn(st.s.t_s, st.s.force_n, fit.tau_s);
+  std::vector<double> v(st.s.t_s.size());
+  const Eigen::Index c = st.first_col;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const double u = (st.s.t_s[i] - st.s.t_s.front()) / st.span_s;
+    v[i] =
+        fit.x(c) + fit.x(0) * load[i] + (st.trend ? fit.x(c + 1) * u + fit.x(c + 2) * u * u : 0.0);
+  }
+  return v;
 }
 
 }  // namespace
@@ -99,104 +225,82 @@ RollerDroop drooping_roller_speed(const std::vector<double>& t_s, const std::vec
           kMinDroopSteps * step_mps))
       return {};
   }
-  std::vector<std::size_t> at;  // the sample after each transition
-  for (std::size_t i = 1; i < n; ++i)
-    if (v[i] != v[i - 1]) at.push_back(i);
-  if (at.empty()) return {};
-  double mean = 0;
-  for (double x : v) mean += x / static_cast<double>(n);
-  const double span = std::max(t_s.back() - t_s.front(), 1e-6);
-  Columns cols;
-  cols.trend = at.size() >= kTrendTransitions;
-  cols.harmonics = at.size() >= kRippleTransitions &&
-                           mean * span / (2 * M_PI * roller_radius_m) >= kHeldRollerMinTurns
-                       ? 2
-                       : 0;
-  // One row more: the roller before the brake (its first level, at the load there) pins the
-  // level where a droop of a step or two crossed one boundary only.
-  const auto m = static_cast<Eigen::Index>(at.size()) + 1;
-  Eigen::VectorXd best;
-  double best_rss = INFINITY, best_tau = 0;
-  auto try_lag = [&](double tau_s) {
-    const auto load = lagged_load(t_s, force_n, tau_s);
-    Eigen::MatrixXd a(m, cols.count());
-    Eigen::VectorXd b(m);
-    for (Eigen::Index k = 0; k + 1 < m; ++k) {
-      const std::size_t i = at[static_cast<std::size_t>(k)];
-      const double tc = 0.5 * (t_s[i] + t_s[i - 1]);
-      fill_row(a, k, cols, 0.5 * (load[i] + load[i - 1]), (tc - t_s.front()) / span,
-               mean * (tc - t_s.front()) / roller_radius_m);
-      b(k) = 0.5 * (v[i] + v[i - 1]);
-    }
-    fill_row(a, m - 1, cols, load.front(), 0.0, 0.0);
-    b(m - 1) = v.front();
-    const Eigen::VectorXd x = a.colPivHouseholderQr().solve(b);
-    const double rss = (a * x - b).squaredNorm();
-    if (rss < best_rss) {
-      best_rss = rss;
-      best = x;
-      best_tau = tau_s;
-    }
-    return rss;
-  };
-  for (double tau_s : kDroopLags) try_lag(tau_s);
-  // The lag between the grid's neighbours of the best, by golden section: on a fast pedal ramp
-  // the drive's speed falls at up to 20 mm/s^2, and a lag 50 ms off puts the rebuilt speed a
-  // millimetre per second off (a slip error of 1e-3 at 4 km/h, more than a wheel's inertia leaves).
-  {
-    const auto it = std::find(kDroopLags.begin(), kDroopLags.end(), best_tau);
-    double lo = it == kDroopLags.begin() ? kDroopLags.front() : *(it - 1);
-    double hi = it + 1 == kDroopLags.end() ? kDroopLags.back() : *(it + 1);
-    constexpr double kGolden = 0.6180339887498949;
-    double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
-    double f1 = try_lag(x1), f2 = try_lag(x2);
-    for (int k = 0; k < kDroopLagRefinements; ++k) {
-      if (f1 < f2) {
-        hi = x2;
-        x2 = x1;
-        f2 = f1;
-        x1 = hi - kGolden * (hi - lo);
-        f1 = try_lag(x1);
-      } else {
-        lo = x1;
-        x1 = x2;
-        f1 = f2;
-        x2 = lo + kGolden * (hi - lo);
-        f2 = try_lag(x2);
-      }
-    }
-  }
+  const Run::RollerStaircase s{t_s, v, force_n, step_mps, roller_radius_m};
+  std::vector<Stair> stairs{read_stair(s)};
+  if (stairs.front().at.empty()) return {};
+  const DroopFit fit = fit_droop(stairs);
   // No finite fit, or one that misses the transitions (the speed moves in ways the model has
   // not: left to the channel's own rebuilding).
-  if (best.size() < 2 ||
-      !(std::sqrt(best_rss / static_cast<double>(m)) <= kMaxMissSteps * step_mps))
-    return {};
+  if (fit.x.size() < 2 || !(fit.miss_steps() <= kMaxMissSteps)) return {};
   // A droop of under half a step is the held roller's (its staircase fit is unbiased there); a
   // roller does not speed up under the load it carries.
-  if (!(-best(1) >= kMinDroopSteps * step_mps)) return {};
-  const auto load = lagged_load(t_s, force_n, best_tau);
+  const double f_max_kn = largest_force_n(force_n) * 1e-3;
+  if (!(fit.mps_per_kn() * f_max_kn >= kMinDroopSteps * step_mps)) return {};
   RollerDroop out;
-  out.v_ref_mps.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double u = (t_s[i] - t_s.front()) / span;
-    out.v_ref_mps[i] =
-        best(0) + best(1) * load[i] + (cols.trend ? best(2) * u + best(3) * u * u : 0.0);
-  }
-  out.mps_per_n = -best(1) / largest_force_n(force_n);  // lagged_load's scale
-  out.lag_s = best_tau;
+  out.v_ref_mps = rebuilt_speed(stairs.front(), fit);
+  out.mps_per_n = fit.mps_per_kn() * 1e-3;
+  out.lag_s = fit.tau_s;
   return out;
 }
 
+namespace {
+
+/// The runs whose droop was fitted, fitted again together: a short run's few transitions cannot
+/// tell the droop from its lag (three runs of a station with 1-5 transitions each read no lag and
+/// half the droop that a run of 11 read at 0.4 s). Each run's speed is rebuilt with the joint
+/// droop and its slip recomputed; returns the joint droop (m/s per N, lag in s), or nothing where
+/// the joint fit misses the transitions (the runs keep their own).
+std::optional<std::pair<double, double>> refit_together(std::vector<Run*>& fitted) {
+  std::vector<Stair> stairs;
+  stairs.reserve(fitted.size());
+  for (const Run* r : fitted) stairs.push_back(read_stair(*r->roller_staircase));
+  // Without the runs' slow trends first: over a pedal ramp the force rises about linearly in
+  // time, and a run's trend takes the droop's place (a heavy station's runs read 0.76-1.09 mm/s
+  // per kN with their trends, 1.35 together without them, the drive's 1.35). The trends come
+  // back only where the runs' transitions cannot be met without them.
+  std::vector<Stair> plain = stairs;
+  for (Stair& st : plain) st.trend = false;
+  DroopFit fit = fit_droop(plain);
+  if (fit.x.size() >= 2 && fit.miss_steps() <= kMaxMissSteps)
+    stairs = std::move(plain);
+  else
+    fit = fit_droop(stairs);
+  if (fit.x.size() < 2 || !(fit.miss_steps() <= kMaxMissSteps) || !(fit.mps_per_kn() > 0))
+    return std::nullopt;
+  for (std::size_t j = 0; j < fitted.size(); ++j) {
+    Run& r = *fitted[j];
+    const Stair& st = stairs[j];
+    const auto v_full = rebuilt_speed(st, fit);
+    // The run's samples are a subset of the staircase's (decimation keeps the times as they were).
+    for (std::size_t i = 0; i < r.t_s.size(); ++i) {
+      const auto at = std::lower_bound(st.s.t_s.begin(), st.s.t_s.end(), r.t_s[i]);
+      if (at == st.s.t_s.end() || *at != r.t_s[i]) continue;
+      const double v_new = v_full[static_cast<std::size_t>(at - st.s.t_s.begin())];
+      if (!(v_new > 0)) continue;
+      r.slip[i] = 1 - (1 - r.slip[i]) * r.v_ref_mps[i] / v_new;
+      r.v_ref_mps[i] = v_new;
+    }
+    r.roller_droop_mps_per_n = fit.mps_per_kn() * 1e-3;
+    r.roller_droop_lag_s = fit.tau_s;
+  }
+  return std::pair{fit.mps_per_kn() * 1e-3, fit.tau_s};
+}
+
+}  // namespace
+
 std::string share_roller_droop(std::vector<Run>& runs) {
-  std::vector<const Run*> fitted;
-  for (const Run& r : runs)
-    if (r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0) fitted.push_back(&r);
+  std::vector<Run*> fitted;
+  for (Run& r : runs)
+    if (r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase)
+      fitted.push_back(&r);
   if (fitted.empty()) return {};
   std::sort(fitted.begin(), fitted.end(), [](const Run* a, const Run* b) {
     return a->roller_droop_mps_per_n < b->roller_droop_mps_per_n;
   });
   const Run& median = *fitted[fitted.size() / 2];
-  const double k = median.roller_droop_mps_per_n, tau_s = median.roller_droop_lag_s;
+  double k = median.roller_droop_mps_per_n, tau_s = median.roller_droop_lag_s;
+  const auto together = fitted.size() > 1 ? refit_together(fitted) : std::nullopt;
+  if (together) std::tie(k, tau_s) = *together;
   std::size_t changed = 0, refused = 0;
   double largest_mps = 0;
   for (Run& r : runs) {
@@ -224,16 +328,27 @@ std::string share_roller_droop(std::vector<Run>& runs) {
     r.roller_held_quantised = false;
     ++changed;
   }
-  if (changed == 0) return {};
-  return fmt::format(
+  if (changed == 0 && !together) return {};
+  const std::string source =
+      together ? fmt::format(
+                     "fitted to the transitions of the {} runs whose quantised speed stepped "
+                     "with it together",
+                     fitted.size())
+               : fmt::format("the median of {} run(s) whose quantised speed stepped with it",
+                             fitted.size());
+  std::string note = fmt::format(
       "the roller's drive droops under the brake's force ({:.3g} mm/s per kN behind a {:.2f} s "
-      "lag, the median of {} run(s) whose quantised speed stepped with it): {} run(s) whose droop "
-      "stayed within a step of the channel, read as held, took it (at most {:.2f} mm/s){}",
-      1e6 * k, tau_s, fitted.size(), changed, 1e3 * largest_mps,
-      refused ? fmt::format("; {} held run(s) would have drooped by more than a step and did not "
-                            "take it",
-                            refused)
-              : std::string());
+      "lag, {})",
+      1e6 * k, tau_s, source);
+  if (changed > 0)
+    note += fmt::format(
+        ": {} run(s) whose droop stayed within a step of the channel, read as held, took it (at "
+        "most {:.2f} mm/s)",
+        changed, 1e3 * largest_mps);
+  if (refused > 0)
+    note += fmt::format(
+        "; {} held run(s) would have drooped by more than a step and did not take it", refused);
+  return note;
 }
 
 }  // namespace brakefit::gap
