@@ -11,7 +11,6 @@
 #include <array>
 #include <cmath>
 #include <optional>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -67,10 +66,20 @@ std::vector<double> lagged_force_kn(const std::vector<double>& t_s, const std::v
   return y;
 }
 
+/// A staircase as the fit reads it, not owned: a run's at conditioning, or one kept on a run.
+struct StaircaseView {
+  const std::vector<double>&t_s, &v_mps, &force_n;
+  double step_mps, roller_radius_m;
+};
+
+StaircaseView view_of(const Run::RollerStaircase& s) {
+  return {s.t_s, s.v_mps, s.force_n, s.step_mps, s.roller_radius_m};
+}
+
 /// One run's staircase as the fit reads it, and its columns: its own level, slow trend (u, u^2
 /// over the run) and ripple harmonics; the droop's column is shared.
 struct Stair {
-  const Run::RollerStaircase& s;
+  StaircaseView s;
   std::vector<std::size_t> at;  ///< the sample after each transition
   double mean_mps = 0, span_s = 1;
   bool trend = false;
@@ -95,7 +104,7 @@ struct Stair {
   }
 };
 
-Stair read_stair(const Run::RollerStaircase& s) {
+Stair read_stair(const StaircaseView& s) {
   Stair out{s, {}, 0, 1, false, 0, 0};
   const std::size_t n = s.t_s.size();
   for (std::size_t i = 1; i < n; ++i)
@@ -225,8 +234,7 @@ RollerDroop drooping_roller_speed(const std::vector<double>& t_s, const std::vec
           kMinDroopSteps * step_mps))
       return {};
   }
-  const Run::RollerStaircase s{t_s, v, force_n, step_mps, roller_radius_m};
-  std::vector<Stair> stairs{read_stair(s)};
+  std::vector<Stair> stairs{read_stair({t_s, v, force_n, step_mps, roller_radius_m})};
   if (stairs.front().at.empty()) return {};
   const DroopFit fit = fit_droop(stairs);
   // No finite fit, or one that misses the transitions (the speed moves in ways the model has
@@ -253,7 +261,7 @@ namespace {
 std::optional<std::pair<double, double>> refit_together(std::vector<Run*>& fitted) {
   std::vector<Stair> stairs;
   stairs.reserve(fitted.size());
-  for (const Run* r : fitted) stairs.push_back(read_stair(*r->roller_staircase));
+  for (const Run* r : fitted) stairs.push_back(read_stair(view_of(*r->roller_staircase)));
   // Without the runs' slow trends first: over a pedal ramp the force rises about linearly in
   // time, and a run's trend takes the droop's place (a heavy station's runs read 0.76-1.09 mm/s
   // per kN with their trends, 1.35 together without them, the drive's 1.35). The trends come
@@ -294,13 +302,15 @@ std::string share_roller_droop(std::vector<Run>& runs) {
     if (r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase)
       fitted.push_back(&r);
   if (fitted.empty()) return {};
+  // In the order of their own droops (the joint fit's columns, and the median where it misses).
   std::sort(fitted.begin(), fitted.end(), [](const Run* a, const Run* b) {
     return a->roller_droop_mps_per_n < b->roller_droop_mps_per_n;
   });
-  const Run& median = *fitted[fitted.size() / 2];
-  double k = median.roller_droop_mps_per_n, tau_s = median.roller_droop_lag_s;
   const auto together = fitted.size() > 1 ? refit_together(fitted) : std::nullopt;
-  if (together) std::tie(k, tau_s) = *together;
+  // One run, or a joint fit that misses: the median of the runs' own.
+  const Run& median = *fitted[fitted.size() / 2];
+  const auto [k, tau_s] =
+      together.value_or(std::pair{median.roller_droop_mps_per_n, median.roller_droop_lag_s});
   std::size_t changed = 0, refused = 0;
   double largest_mps = 0;
   for (Run& r : runs) {
