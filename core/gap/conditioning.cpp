@@ -65,6 +65,12 @@ constexpr double kHeldRollerSteps = 5.0;
 /// of rest a pressure channel clipped at zero reads its noise as a mean force, a dead zone of a
 /// few 0.01 bar to the fits (generator A's null BIC drops 6.7 -> 25).
 constexpr double kRestPressureBar = 0.2;
+/// An event whose pressure peaks under this is an air brake's (0-10 bar; a hydraulic brake
+/// locks a wheel at tens of bar). Its 0.2 bar is 1.6 kN on a truck's wheel: a run started there
+/// begins with a load already on, and a roller's drive drooping behind it read a lag 50 ms
+/// short. An air brake rests under this share of its peak.
+constexpr double kAirBrakeMaxBar = 10.0;
+constexpr double kAirBrakeRestShare = 0.005;
 
 /// A wheel that stepped down this shortly before its run starts, to a level this many
 /// quantisation steps below its mean at rest, was braked before the pressure channel showed it (a
@@ -134,11 +140,15 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     full.force_n.push_back(f);
   };
   // The run starts at the rise from rest: from the lead-in's last sample at rest on.
+  double peak_bar = 0;
+  for (const auto& s : e.samples) peak_bar = std::max(peak_bar, s.pressure_bar);
+  const double rest_bar =
+      peak_bar < kAirBrakeMaxBar ? kAirBrakeRestShare * peak_bar : kRestPressureBar;
   std::size_t rest = e.lead_in.size();
-  while (rest > 0 && e.lead_in[rest - 1].pressure_bar > kRestPressureBar) --rest;
+  while (rest > 0 && e.lead_in[rest - 1].pressure_bar > rest_bar) --rest;
   for (std::size_t i = rest > 0 ? rest - 1 : e.lead_in.size(); i < e.lead_in.size(); ++i)
     take(e.lead_in[i]);
-  measure_rest_slip(full, std::span(e.lead_in).first(rest), kRestPressureBar);
+  measure_rest_slip(full, std::span(e.lead_in).first(rest), rest_bar);
   for (const auto& s : e.samples) take(s);
   if (const std::size_t keep = runaway_cut(full, v_wheel, c.bench, o.runaway_slip_per_sample);
       keep < full.t_s.size()) {

@@ -353,3 +353,28 @@ TEST(Stations, AHeavyVehiclesTimeOffsetIsNotAThresholdThatTakesItsForce) {
   });
   EXPECT_TRUE(refused) << "the threshold's fit and why it was refused are in the notes";
 }
+
+TEST(Stations, AnAirBrakedRunStartsAtRest) {
+  // Seed 1000013 of the every-station draw: a truck wheel on a 2.6 km/h roller, air brakes to
+  // 3.3 bar, the drive losing 1.35 mm/s per kN behind 0.29 s. A car's rest (0.2 bar) is 1.6 kN
+  // on this wheel: a run started there began with a load the drive's state had not followed,
+  // and the station's droop read a lag of 0.23 s for the 0.28 s the drive shows behind the
+  // pressure channel's filter.
+  const auto set =
+      sim2::draw_set(can::BenchKind::Roller, "none", 0, 1000013, sim2::Stations::Every);
+  ASSERT_GT(set.runs.front().fz_n, 18000.0);
+  auto q = conditioned(set, false);
+  for (const auto& r : q) {
+    const double f_max = *std::max_element(r.force_n.begin(), r.force_n.end());
+    EXPECT_LT(r.force_n.front(), 0.01 * f_max) << r.name;
+  }
+  const std::string note = gap::share_roller_droop(q);
+  EXPECT_NE(note.find("together"), std::string::npos) << note;
+  const auto& drive = set.runs.front();
+  const double lag_s = drive.roller_droop_tau_s - drive.tester.pressure_filter_s;
+  for (const auto& r : q) {
+    if (r.roller_droop_mps_per_n > 0) {
+      EXPECT_NEAR(r.roller_droop_lag_s, lag_s, 0.02) << r.name;
+    }
+  }
+}
