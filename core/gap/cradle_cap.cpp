@@ -62,6 +62,19 @@ std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs) {
 
 bool cap_at_fitted_peak(CapEvidence& e, const std::vector<Run>& runs, const MfParams& start) {
   e.fitted_peak_ratio = fit_runs(pointers(runs), {}, start).params[2] / e.cap_n;
+  // Fitted also from the wheel's rest, where the runs rested off zero slip beyond its
+  // uncertainty: a slip offset (a wheel's radius off) shows at rest and moves the curve without
+  // reshaping it, and fitted from zero a sharp peak's curve is bent off its own (a truck's runs
+  // 0.8 % of slip off peaked past their runaway, and a cap was named beside the offset). A
+  // relaxing tyre's bend does not show at rest: a cap behind it stays.
+  if (const RestSlip rest = pooled_rest_slip(runs);
+      rest.points > 0 && std::abs(rest.mean) > rest.uncertainty) {
+    std::vector<Run> from_rest = runs;
+    for (Run& r : from_rest)
+      for (double& slip : r.slip) slip -= rest.mean;
+    e.fitted_peak_ratio =
+        std::min(e.fitted_peak_ratio, fit_runs(pointers(from_rest), {}, start).params[2] / e.cap_n);
+  }
   return e.fitted_peak_ratio <= kCapAtPeakRatio;
 }
 

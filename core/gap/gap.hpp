@@ -356,8 +356,9 @@ std::optional<CapEvidence> cradle_cap_evidence(const std::vector<Run>& runs);
 /// A Magic Formula fitted to the whole runs peaks within this of the runaway force: the runs
 /// ended at the tyre's own peak or at a cap no lower than it, which the runs cannot tell apart.
 inline constexpr double kCapAtPeakRatio = 1.03;
-/// Sets e.fitted_peak_ratio from a baseline fit of the whole runs (from start); true where it is
-/// at most kCapAtPeakRatio.
+/// Sets e.fitted_peak_ratio from fits of the whole runs (from start), as they are and from the
+/// wheel's rest where they rested off zero slip (the lower); true where it is at most
+/// kCapAtPeakRatio.
 bool cap_at_fitted_peak(CapEvidence& e, const std::vector<Run>& runs, const MfParams& start);
 
 /// The gates calibrated on null data of the condition by bench/gap_referee --calibrate (the
