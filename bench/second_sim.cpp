@@ -116,6 +116,10 @@ int main(int argc, char** argv) {
       std::cout << fmt::format("second effect {} magnitude {:.4g}\n", effect2,
                                set.magnitudes.back());
     std::cout << "station: " << set.station << "\n";
+    if (const auto& r = set.runs.front(); bench == "roller" && r.roller_droop_ratio > 0)
+      std::cout << fmt::format(
+          "roller drive (given): droops {:.2f} % at {:.0f} N behind {:.3f} s\n",
+          100 * r.roller_droop_ratio, r.roller_droop_ref_n, r.roller_droop_tau_s);
     if (bench == "ground" && (pitch_lag >= 0 || pitch_hz >= 0 || pitch_damping >= 0)) {
       const auto& r = set.runs.front();
       std::cout << (r.pitch_hz > 0 ? fmt::format("pitch (given): mode {:g} Hz damping {:g}\n",
