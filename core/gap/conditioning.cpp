@@ -438,7 +438,8 @@ std::size_t points_per_run(std::size_t n_runs) {
 
 double relative_cost(std::size_t n_runs) {
   const double points = static_cast<double>(n_runs * points_per_run(n_runs));
-  const double folds = static_cast<double>(std::min(n_runs, kMaxFolds));
+  const double folds =
+      static_cast<double>(n_runs == 2 ? 2 * kTwoRunBlocks : std::min(n_runs, kMaxFolds));
   return points * folds / (3.0 * ConditionOptions{}.max_points * 3.0);
 }
 

@@ -23,7 +23,7 @@ class GapProblem final : public fit::LeastSquaresProblem {
   GapProblem(const std::vector<const Run*>& runs, const std::vector<Effect>& effects,
              std::vector<double> fixed_base = {})
       : runs_(runs), effects_(effects), base_(std::move(fixed_base)) {
-    for (const Run* r : runs_) n_ += static_cast<Eigen::Index>(r->t_s.size());
+    for (const Run* r : runs_) n_ += static_cast<Eigen::Index>(r->fitted_points());
   }
   Eigen::Index residual_count() const override { return n_; }
   void evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& res, Eigen::MatrixXd* j) const override {
@@ -48,7 +48,8 @@ class GapProblem final : public fit::LeastSquaresProblem {
     Eigen::Index o = 0;
     for (const Run* r : runs_) {
       const auto f = predict(*r, p, effects_);
-      for (std::size_t i = 0; i < f.size(); ++i) res(o++) = f[i] - r->force_n[i];
+      for (std::size_t i = 0; i < f.size(); ++i)
+        if (r->fitted_at(i)) res(o++) = f[i] - r->force_n[i];
     }
   }
   const std::vector<const Run*>& runs_;
@@ -216,13 +217,13 @@ Fit fit_effects(const std::vector<const Run*>& runs, const std::vector<Effect>& 
   out.params = b;
   out.stderr_.assign(4, NAN);
   std::size_t n = 0;
-  for (const Run* r : runs) n += r->t_s.size();
+  for (const Run* r : runs) n += r->fitted_points();
   out.points = n;
   if (effects.empty()) {
     for (const Run* r : runs) {
       const auto f = predict(*r, b, {});
       for (std::size_t i = 0; i < f.size(); ++i)
-        out.ssr += (f[i] - r->force_n[i]) * (f[i] - r->force_n[i]);
+        if (r->fitted_at(i)) out.ssr += (f[i] - r->force_n[i]) * (f[i] - r->force_n[i]);
     }
     return out;
   }
@@ -248,6 +249,13 @@ Fit fit_effects(const std::vector<const Run*>& runs, const std::vector<Effect>& 
   out.stderr_.insert(out.stderr_.end(), errors.begin(), errors.end());
   out.ssr = r.ssr;
   return out;
+}
+
+std::size_t Run::fitted_points() const {
+  return fit_mask.empty()
+             ? t_s.size()
+             : static_cast<std::size_t>(std::count_if(fit_mask.begin(), fit_mask.end(),
+                                                      [](std::uint8_t m) { return m != 0; }));
 }
 
 std::vector<const Run*> pointers(const std::vector<Run>& runs) {

@@ -6,6 +6,7 @@
 // and accepted only past a gain gate and a BIC margin.
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <span>
@@ -183,6 +184,11 @@ struct Run {
   double held_level_mps = 0.0, held_step_mps = 0.0;
   double held_until_s = -INFINITY;
   bool held_placed = false;  ///< hold_rest_at_foot has placed the rest (once)
+  /// The samples a fit takes (empty: all; 0 leaves one out): a two-run set's held-out fold keeps a
+  /// block of one run out of the fit while the run's history is still predicted through it.
+  std::vector<std::uint8_t> fit_mask;
+  bool fitted_at(std::size_t i) const { return fit_mask.empty() || fit_mask[i] != 0; }
+  std::size_t fitted_points() const;
   /// Slip rate at the start of the run (least squares over its first 40 ms, full rate): before
   /// the event the slip is taken as the ramp from zero at this rate (time offset).
   double initial_slip_rate_per_s = 0.0;

@@ -165,8 +165,11 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
 std::string tyre_shift_contradicted(const std::vector<Run>& runs, double shift_ratio);
 /// Held-out folds at most: up to this many runs each is held out alone (leave one run out).
 inline constexpr std::size_t kMaxFolds = 6;
+/// A two-run set's runs are each held out in this many blocks of consecutive points (heldout).
+inline constexpr std::size_t kTwoRunBlocks = 3;
 /// Held-out error: RMS over runs of each run's RMSE with parameters fitted on the runs outside its
-/// fold (one run per fold up to kMaxFolds runs, blocks of consecutive runs past that).
+/// fold (one run per fold up to kMaxFolds runs, blocks of consecutive runs past that; of two runs,
+/// each run's kTwoRunBlocks blocks of points, the rest of both runs fitted).
 double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects, const Fitter& fit);
 /// The runs a held-out fold is fitted on: all but fold k's (heldout's folds: one run each up to
 /// kMaxFolds runs, blocks of consecutive runs past that); [lo, hi) are the held-out runs.

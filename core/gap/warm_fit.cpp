@@ -1,7 +1,6 @@
 #include "core/gap/warm_fit.hpp"
 
 #include <algorithm>
-#include <numeric>
 #include <optional>
 
 #include "core/gap/internal.hpp"
@@ -11,10 +10,16 @@ namespace brakefit::gap {
 WarmFitter::RunsKey WarmFitter::key_of(const std::vector<const Run*>& runs) {
   RunsKey key;
   key.reserve(runs.size());
-  for (const Run* r : runs)
-    key.emplace_back(r->t_s.size(), r->t_s.empty() ? 0.0 : r->t_s.front(),
-                     std::accumulate(r->slip.begin(), r->slip.end(), 0.0),
-                     std::accumulate(r->force_n.begin(), r->force_n.end(), 0.0));
+  // Over the samples a fit takes: a run with a block held out is other runs.
+  for (const Run* r : runs) {
+    double slip = 0, force = 0;
+    for (std::size_t i = 0; i < r->t_s.size(); ++i)
+      if (r->fitted_at(i)) {
+        slip += r->slip[i];
+        force += r->force_n[i];
+      }
+    key.emplace_back(r->fitted_points(), r->t_s.empty() ? 0.0 : r->t_s.front(), slip, force);
+  }
   return key;
 }
 
