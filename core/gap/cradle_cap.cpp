@@ -106,8 +106,13 @@ static double end_force_rate_n_per_s(const Run& r) {
   return m >= 3 && den > 0 ? (m * stf - st * sf) / den : NAN;
 }
 
+/// Runs needed to read a cap behind a named lag.
+constexpr std::size_t kCapBehindLagMinRuns = 3;
+
 std::optional<CapEvidence> cap_behind_lag(const Report& rep, const std::vector<Run>& runs) {
-  if (runs.size() < 2 || std::isfinite(rep.cap_n)) return std::nullopt;
+  // Two runs' runaways meeting once each is moved by a fitted offset is one coincidence, not a
+  // cap (a car's two runs at 2.1 km/h with a 16 ms offset, read at 9 ms, met within 1.8 %).
+  if (runs.size() < kCapBehindLagMinRuns || std::isfinite(rep.cap_n)) return std::nullopt;
   // A channel dt late reads the force the tyre had dt before: each run's runaway at
   // F + dt dF/dt (a fast ramp's runaway reads lower than a slow one's). (Not behind a
   // relaxation: a relaxing tyre on a fast ramp runs away below its steady peak at one force in
