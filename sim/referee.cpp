@@ -308,10 +308,14 @@ GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
       ++g.refused;  // a null set the diagnosis refuses has no scores to set a gate by
       continue;
     }
-    double best_gain = -1e9, best_bic = 1e9;
+    // A candidate passes only where both gates pass: each gate is set by the null candidates
+    // that pass the other's side of zero (a gain with an in-sample BIC drop, a BIC drop with a
+    // held-out gain). A candidate at its null value fitted into another minimum of the folds
+    // (a truck's two runs: a threshold of 0.001 bar, gain 0.23, BIC +5.8) never passes.
+    double best_gain = 0, best_bic = 0;
     for (const auto& e : rep.effects) {
-      best_gain = std::max(best_gain, e.gain);
-      best_bic = std::min(best_bic, e.delta_bic);
+      if (e.delta_bic < 0) best_gain = std::max(best_gain, e.gain);
+      if (e.gain > 0) best_bic = std::min(best_bic, e.delta_bic);
     }
     g.null_best_gain.push_back(best_gain);
     g.null_best_delta_bic.push_back(best_bic);
