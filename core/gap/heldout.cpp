@@ -26,9 +26,9 @@ namespace {
 /// Two runs held out in blocks: each run's kTwoRunBlocks blocks of consecutive points, one at a
 /// time, its run's other blocks and the other run fitted. One run alone cannot place what only
 /// the two runs' different ramps separate (a time offset's force is a ramp's rate times the
-/// offset, on one ramp the curve's own shift): a car's two runs at 2.1 km/h with a 16 ms offset
-/// held out one run at a time read the offset at 9 ms, and the other run 95 % worse than without
-/// it. The run's history (lags, filters) is still predicted through its held-out block.
+/// offset, on one ramp the curve's own shift): of a car's two runs at 2.1 km/h with a 16 ms
+/// offset, the offset fitted on either run alone predicted the other 95 % worse than no offset.
+/// The run's history (lags, filters) is still predicted through its held-out block.
 double heldout_two_runs(const std::vector<Run>& runs, const std::vector<Effect>& effects,
                         const Fitter& fit) {
   double sq_runs = 0;
