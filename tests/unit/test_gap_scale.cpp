@@ -12,6 +12,7 @@
 #include "core/gap/internal.hpp"
 #include "sim/referee.hpp"
 #include "sim/second/generator.hpp"
+#include "tests/unit/station_test_util.hpp"
 
 using namespace brakefit;
 
@@ -173,9 +174,7 @@ TEST(TwoRuns, ATimeOffsetIsPlacedOnBothRunsRamps) {
   const auto set =
       sim2::draw_set(can::BenchKind::Roller, "time_offset", 0.01585, 1102, sim2::Stations::Every);
   ASSERT_EQ(set.runs.size(), 2u);
-  std::vector<gap::Run> runs;
-  for (std::size_t k = 0; k < set.runs.size(); ++k)
-    sim::append_event_csv_runs(runs, sim2::simulate_event_csv(set.runs[k]), fmt::format("r{}", k));
+  const std::vector<gap::Run> runs = test::conditioned(set, false);
   const auto rep =
       gap::diagnose(runs, sim::pooled_start(runs), gap::calibrated_options(gap::Condition::Roller));
   ASSERT_FALSE(rep.verdict.empty());
