@@ -58,6 +58,7 @@ sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Genera
       seeds.push_back(kCalibrationSeed0 + i);
       gates.null_best_gain.push_back(g.null_best_gain.front());
       gates.null_best_delta_bic.push_back(g.null_best_delta_bic.front());
+      gates.null_points.push_back(g.null_points.front());
       gates.null_gap_over_floor.push_back(g.null_gap_over_floor.front());
     }
     sim::set_gates(gates);
@@ -69,13 +70,13 @@ sim::GateCalibration calibrate(gap::Condition c, const Settings& st, sim::Genera
                            seeds[static_cast<std::size_t>(largest - gates.null_best_gain.begin())]);
   std::cerr << fmt::format(
       "[{}] null best-candidate gain: median {:.3f}, max {:.3f}; best dBIC min {:.1f}; gates: "
-      "gain >= {:.3f}, dBIC <= -{:.1f} (shipped: {:.3f}, -{:.1f}); null gap / floor: median "
-      "{:.2f}, max {:.2f}, fit-quality factor {:.2f}\n",
+      "gain >= {:.3f}, dBIC <= -max({:.1f}, {:.4f} per point) (shipped: {:.3f}, -{:.1f}); null "
+      "gap / floor: median {:.2f}, max {:.2f}, fit-quality factor {:.2f}\n",
       cname, quantile(gates.null_best_gain, 0.5), quantile(gates.null_best_gain, 1.0),
       quantile(gates.null_best_delta_bic, 0.0), gates.options.gate_gain, gates.options.bic_margin,
-      gap::calibrated_options(c).gate_gain, gap::calibrated_options(c).bic_margin,
-      quantile(gates.null_gap_over_floor, 0.5), quantile(gates.null_gap_over_floor, 1.0),
-      gates.options.noise_factor);
+      gates.options.bic_margin_per_point, gap::calibrated_options(c).gate_gain,
+      gap::calibrated_options(c).bic_margin, quantile(gates.null_gap_over_floor, 0.5),
+      quantile(gates.null_gap_over_floor, 1.0), gates.options.noise_factor);
   return gates;
 }
 
@@ -212,6 +213,7 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   j["null_trials"] = n_none;
   j["gate_gain"] = gates.options.gate_gain;
   j["bic_margin"] = gates.options.bic_margin;
+  j["bic_margin_per_point"] = gates.options.bic_margin_per_point;
   j["null_best_gain_max"] = quantile(gates.null_best_gain, 1.0);
   j["null_best_delta_bic_min"] = quantile(gates.null_best_delta_bic, 0.0);
   j["accuracy_effects"] = n_effects ? static_cast<double>(correct_effects) / n_effects : NAN;

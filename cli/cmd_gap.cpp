@@ -70,6 +70,7 @@ void add_gap_command(CLI::App& app) {
     bool json = false;
     RunOptions run;
     double gate_gain = NAN, bic_margin = NAN;     ///< NaN: the calibrated gate of the condition
+    double bic_margin_per_point = NAN;            ///< NaN: none (the condition's)
     double fit_quality_factor = NAN;              ///< NaN: the condition's (1.5)
     double vehicle_mass_kg = 0.0;                 ///< 0: not given
     double cg_height_m = 0.0, wheelbase_m = 0.0;  ///< 0: not given
@@ -99,6 +100,10 @@ void add_gap_command(CLI::App& app) {
                   "null data of the condition: roller, ground or roller vs road)");
   cmd->add_option("--bic-margin", o->bic_margin,
                   "minimum BIC decrease to accept an effect (default: calibrated, as the gain)");
+  cmd->add_option("--bic-margin-per-point", o->bic_margin_per_point,
+                  "minimum BIC decrease per point fitted, where it asks more than --bic-margin "
+                  "(bench/gap_referee calibrates it on null data)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--fit-quality-factor", o->fit_quality_factor,
                   "a held-out gap above this x the noise floor is `unexplained` (default 1.5; "
                   "bench/gap_referee calibrates it on null data, as the gates)")
@@ -226,12 +231,14 @@ void add_gap_command(CLI::App& app) {
       gap_options.declared_kx_load_ratio = declared->more.at(0);
     }
     if (std::isfinite(o->bic_margin)) gap_options.bic_margin = o->bic_margin;
+    if (std::isfinite(o->bic_margin_per_point))
+      gap_options.bic_margin_per_point = o->bic_margin_per_point;
     if (std::isfinite(o->fit_quality_factor)) gap_options.noise_factor = o->fit_quality_factor;
     spdlog::info(
-        "gap: condition {}, gates: held-out gain >= {:.3f}, BIC drop >= {:.1f}, "
-        "fit-quality factor {:.2f}",
+        "gap: condition {}, gates: held-out gain >= {:.3f}, BIC drop >= max({:.1f}, {:.4f} per "
+        "point), fit-quality factor {:.2f}",
         gap::to_string(condition), gap_options.gate_gain, gap_options.bic_margin,
-        gap_options.noise_factor);
+        gap_options.bic_margin_per_point, gap_options.noise_factor);
     const gap::Report rep =
         transfer ? gap::diagnose_transfer(roller_runs, runs, seed.params, gap_options)
                  : gap::diagnose(runs, seed.params, gap_options);

@@ -46,6 +46,7 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
   j["condition"] = gap::to_string(condition);
   j["gates"] = {{"gain", num(gates.gate_gain)},
                 {"bic_margin", num(gates.bic_margin)},
+                {"bic_margin_per_point", num(gates.bic_margin_per_point)},
                 {"fit_quality_factor", num(gates.noise_factor)},
                 {"min_gap_over_floor", num(gates.min_gap_over_floor)}};
   j["runs"] = nlohmann::ordered_json::array();

@@ -126,17 +126,20 @@ TrialResult run_trial(const Scenario& base, const Injection& inj, std::uint64_t 
 struct GateCalibration {
   gap::Options options;
   std::vector<double> null_best_gain, null_best_delta_bic;
+  std::vector<double> null_points;  ///< each null set's points fitted (its BIC drop per point)
   /// Each null set's held-out gap over its noise floor: the structure the conditioning leaves
   /// on data with no effect (a quantised, rippled export leaves some; see set_gates).
   std::vector<double> null_gap_over_floor;
   int refused = 0;  ///< null sets the diagnosis refused (too few usable runs): not scored
 };
 /// Diagnoses n null sets of a condition (seeds seed0, seed0+1, ...) and sets the gates above what
-/// they show: gain gate = max(start gate, 1.5 x the largest best-candidate gain), BIC likewise.
+/// they show: gain gate = max(start gate, 1.5 x the largest best-candidate gain), BIC likewise
+/// per point fitted (set_gates).
 GateCalibration calibrate_gates(gap::Condition c, int n, std::uint64_t seed0,
                                 const gap::Options& start, Generator g = Generator::A);
 /// The gates from the null scores in g (options hold the floors): gain gate = max(floor, 1.5 x
-/// the largest null gain), BIC margin = max(floor, 1.5 x the largest null BIC drop), the
+/// the largest null gain), BIC margin per point = 1.5 x the largest null BIC drop per point
+/// fitted (bic_margin, the floor, stays as given), the
 /// fit-quality factor (gap left above it x the noise floor: `unexplained`) = max(floor, 1.1 x the
 /// largest null gap / floor).
 void set_gates(GateCalibration& g);

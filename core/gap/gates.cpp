@@ -36,6 +36,10 @@ Options calibrated_options(Condition c, Options base) {
   return base;
 }
 
+double bic_margin_for(const Options& o, std::size_t points) {
+  return std::max(o.bic_margin, o.bic_margin_per_point * static_cast<double>(points));
+}
+
 bool at_bound(double v, const EffectParam& p) {
   const double tol = 0.005 * (p.hi - p.lo);
   return (!p.lo_is_physical && v <= p.lo + tol) || v >= p.hi - tol;

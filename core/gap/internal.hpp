@@ -244,6 +244,10 @@ struct Selection {
 /// gap_after_rmse_n, the joint estimates and the verdict.
 void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Options& o);
 
+/// The BIC drop a candidate must reach on runs of `points` fitted points: bic_margin, or
+/// bic_margin_per_point x points where that asks more.
+double bic_margin_for(const Options& o, std::size_t points);
+
 /// The share of the structure beyond the noise that a held-out error after_n keeps of the one
 /// before_n left (noise and structure add in quadrature: sqrt(gap^2 - noise^2)); 1 where nothing
 /// beyond the noise was there to explain.

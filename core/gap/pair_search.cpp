@@ -48,7 +48,7 @@ bool passes(PairFound& p, double gap_before_n, double left_n, const std::vector<
   }
   const double after_n = p.in_sample ? p.in_sample_n : p.heldout_n;
   if (p.gain < o.min_first_gain || after_n > (1.0 - o.gate_gain) * left_n ||
-      p.delta_bic > -2.0 * o.bic_margin || p.gain_over_a < o.gate_gain ||
+      p.delta_bic > -2.0 * bic_margin_for(o, p.fit.points) || p.gain_over_a < o.gate_gain ||
       p.gain_over_b < o.gate_gain)
     return false;
   for (EffectScore* m : {&p.a, &p.b}) {

@@ -168,8 +168,11 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       }
     }
     const std::vector<std::size_t> order = by_gain();
+    std::size_t points = 0;
+    for (const Run& r : runs) points += r.fitted_points();
+    const double margin = bic_margin_for(o, points);
     auto passes = [&](const EffectScore& e) {
-      return e.gain >= o.gate_gain && e.delta_bic <= -o.bic_margin;
+      return e.gain >= o.gate_gain && e.delta_bic <= -margin;
     };
     // The best candidate past the gates whose parameters all lie inside their physical ranges (a
     // misspecified curve on the ground was taken for load transfer with the stiffness ratio at
@@ -178,8 +181,8 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       e.round = static_cast<int>(round);
       if (e.gain < o.gate_gain)
         e.decision = fmt::format("held-out gain below the gate {:.3f}", o.gate_gain);
-      else if (e.delta_bic > -o.bic_margin)
-        e.decision = fmt::format("BIC drop below the margin {:.1f}", o.bic_margin);
+      else if (e.delta_bic > -margin)
+        e.decision = fmt::format("BIC drop below the margin {:.1f}", margin);
     }
     std::size_t pick = order.size();
     for (std::size_t k = 0; k < order.size() && pick == order.size(); ++k) {

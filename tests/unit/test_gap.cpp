@@ -365,11 +365,14 @@ TEST(GapReferee, TheFitQualityFactorSitsAboveTheLargestNullGap) {
   sim::GateCalibration g;
   g.null_best_gain = {0.01, 0.05};
   g.null_best_delta_bic = {-3.0, -20.0};
+  g.null_points = {20.0, 400.0};  // -0.15 and -0.05 per point
   g.null_gap_over_floor = {1.02, 1.61};
   sim::set_gates(g);
   EXPECT_NEAR(g.options.noise_factor, 1.1 * 1.61, 1e-12);
   EXPECT_NEAR(g.options.gate_gain, 0.10, 1e-12);  // 1.5 x 0.05 is below the floor 0.10
-  EXPECT_NEAR(g.options.bic_margin, 30.0, 1e-12);
+  // The margin is per point, set by the small set's drop: 1.5 x 0.15. The floor stays.
+  EXPECT_NEAR(g.options.bic_margin_per_point, 0.225, 1e-12);
+  EXPECT_NEAR(g.options.bic_margin, gap::Options{}.bic_margin, 1e-12);
   sim::GateCalibration clean;
   clean.null_best_gain = {0.01};
   clean.null_best_delta_bic = {-1.0};
