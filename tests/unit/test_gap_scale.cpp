@@ -187,3 +187,27 @@ TEST(TwoRuns, ATimeOffsetIsPlacedOnBothRunsRamps) {
       EXPECT_GT(e.gain, 0.3);
     }
 }
+
+TEST(Gates, TheBicMarginIsPerPointFitted) {
+  // Seed 1173 of the every-station draw: a car's two runs exported at 50 Hz, the pressure channel
+  // 39 ms late. Its BIC drop (a few hundred points) stays under the 701 that a 2 000-point null
+  // set's drop set as one margin for every set; per point, the same null asks ~0.35 of each.
+  const auto set =
+      sim2::draw_set(can::BenchKind::Roller, "time_offset", 0.03853, 1173, sim2::Stations::Every);
+  const std::vector<gap::Run> runs = test::conditioned(set, false);
+  gap::Options o = gap::calibrated_options(gap::Condition::Roller);
+  o.gate_gain = 0.169;
+  o.noise_factor = 5.92;
+  o.bic_margin = 700.8;
+  const auto absolute = gap::diagnose(runs, sim::pooled_start(runs), o);
+  EXPECT_EQ(absolute.verdict, std::vector<std::string>{"none"});
+  o.bic_margin = 10.0;
+  o.bic_margin_per_point = 0.3504;
+  EXPECT_NEAR(gap::bic_margin_for(o, 100), 35.04, 1e-9);
+  EXPECT_EQ(gap::bic_margin_for(o, 10), 10.0);  // the floor
+  const auto rep = gap::diagnose(runs, sim::pooled_start(runs), o);
+  EXPECT_LT(gap::bic_margin_for(o, rep.before.points), 700.8);
+  ASSERT_FALSE(rep.verdict.empty());
+  EXPECT_TRUE(rep.verdict.front() == "time_offset" || rep.verdict.front() == "relaxation_length")
+      << rep.verdict.front();
+}
