@@ -107,6 +107,16 @@ RollerDroop drooping_roller_speed(const std::vector<double>& t_s, const std::vec
 /// the runs where it was fitted, its mean speed kept (the slip recomputed). Returns a note, or
 /// empty where no run was changed.
 std::string share_roller_droop(std::vector<Run>& runs);
+/// The runs again with the drive's droop refitted at another lag its staircases allow.
+struct DroopLagAlternative {
+  double lag_s = 0.0;
+  std::vector<Run> runs;
+};
+/// The lags that meet the drooping runs' transitions nearly as well as the one read: their
+/// shortest and longest (none where no run droops). A lag 0.1 s off moves a 2 km/h roller
+/// drooping 1.5 mm/s per kN as a channel 16 ms late moves the force: what a named lag must beat.
+/// Runs read as held that took the station's droop keep it at the lag read.
+std::vector<DroopLagAlternative> droop_lag_alternatives(const std::vector<Run>& runs);
 /// A fifth wheel's ripple is read from its own speed on runs spanning this many revolutions.
 /// Over fewer the trend's misfit (a spline knotted every 0.75 revolutions) projects onto the
 /// ripple's columns as much as onto its neighbours': 10 of generator B's 140 ground runs of

@@ -244,6 +244,13 @@ struct Selection {
 /// gap_after_rmse_n, the joint estimates and the verdict.
 void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Options& o);
 
+/// A time offset or relaxation (e, scored on runs against the model `current`) that a drooping
+/// roller drive's lag, read at another value its speed's transitions allow, explains within the
+/// gain gate: the note and decision saying so (droop_lag.cpp); nothing where it beats them all.
+std::optional<MissingEvidence> lag_in_the_drive(const EffectScore& e, const std::vector<Run>& runs,
+                                                const std::vector<Effect>& current,
+                                                const Fitter& fit, const Options& o);
+
 /// The BIC drop a candidate must reach on runs of `points` fitted points: bic_margin, or
 /// bic_margin_per_point x points where that asks more.
 double bic_margin_for(const Options& o, std::size_t points);

@@ -30,6 +30,9 @@ constexpr std::size_t kTrendTransitions = 20, kRippleTransitions = 16;
 constexpr double kMinDroopSteps = 0.5;
 /// The fit's RMS miss at the transitions, in steps, above which the model is not the roller's.
 constexpr double kMaxMissSteps = 0.35;
+/// The lags droop_lag_alternatives tries (s apart), and how much more than the best fit's misfit
+/// at the transitions a lag may leave (x dof: an F of about two standard errors).
+constexpr double kAltLagStepS = 0.025, kLagAllowedF = 4.0;
 /// A run read as held takes a station's droop only where it droops by at most this many steps
 /// over the run (more, and its staircase would have shown it).
 constexpr double kMaxSharedDroopSteps = 1.0;
@@ -125,12 +128,13 @@ Stair read_stair(const StaircaseView& s) {
 struct DroopFit {
   Eigen::VectorXd x;
   double rss_steps2 = INFINITY, tau_s = 0;
-  Eigen::Index rows = 0;
+  Eigen::Index rows = 0, cols = 0;
   double mps_per_kn() const { return x.size() ? -x(0) : 0.0; }
   double miss_steps() const { return std::sqrt(rss_steps2 / static_cast<double>(rows)); }
 };
 
-DroopFit fit_droop(std::vector<Stair>& stairs) {
+/// The droop at the lag that meets the transitions best, or at fixed_tau_s where given.
+DroopFit fit_droop(std::vector<Stair>& stairs, std::optional<double> fixed_tau_s = std::nullopt) {
   Eigen::Index cols = 1, rows = 0;
   for (Stair& st : stairs) {
     st.first_col = cols;
@@ -141,6 +145,7 @@ DroopFit fit_droop(std::vector<Stair>& stairs) {
   }
   DroopFit best;
   best.rows = rows;
+  best.cols = cols;
   auto try_lag = [&](double tau_s) {
     Eigen::MatrixXd a = Eigen::MatrixXd::Zero(rows, cols);
     Eigen::VectorXd b(rows);
@@ -168,6 +173,10 @@ DroopFit fit_droop(std::vector<Stair>& stairs) {
     }
     return rss;
   };
+  if (fixed_tau_s) {
+    try_lag(*fixed_tau_s);
+    return best;
+  }
   for (double tau_s : kDroopLags) try_lag(tau_s);
   // The lag between the grid's neighbours of the best, by golden section: on a fast pedal ramp
   // the drive's speed falls at up to 20 mm/s^2, and a lag 50 ms off puts the rebuilt speed a
@@ -258,21 +267,34 @@ namespace {
 /// half the droop that a run of 11 read at 0.4 s). Each run's speed is rebuilt with the joint
 /// droop and its slip recomputed; returns the joint droop (m/s per N, lag in s), or nothing where
 /// the joint fit misses the transitions (the runs keep their own).
-std::optional<std::pair<double, double>> refit_together(std::vector<Run*>& fitted) {
+/// The fitted runs' staircases, with their slow trends or without (joint_stairs).
+struct JointStairs {
   std::vector<Stair> stairs;
-  stairs.reserve(fitted.size());
-  for (const Run* r : fitted) stairs.push_back(read_stair(view_of(*r->roller_staircase)));
-  // Without the runs' slow trends first: over a pedal ramp the force rises about linearly in
-  // time, and a run's trend takes the droop's place (a heavy station's runs read 0.76-1.09 mm/s
-  // per kN with their trends, 1.35 together without them, the drive's 1.35). The trends come
-  // back only where the runs' transitions cannot be met without them.
-  std::vector<Stair> plain = stairs;
+  DroopFit fit;
+};
+
+/// The runs' staircases fitted together (at fixed_tau_s where given). Without the runs' slow
+/// trends first: over a pedal ramp the force rises about linearly in time, and a run's trend
+/// takes the droop's place (a heavy station's runs read 0.76-1.09 mm/s per kN with their trends,
+/// 1.35 together without them, the drive's 1.35). The trends come back only where the runs'
+/// transitions cannot be met without them.
+JointStairs joint_stairs(const std::vector<Run*>& fitted, std::optional<double> fixed_tau_s) {
+  JointStairs out;
+  out.stairs.reserve(fitted.size());
+  for (const Run* r : fitted) out.stairs.push_back(read_stair(view_of(*r->roller_staircase)));
+  std::vector<Stair> plain = out.stairs;
   for (Stair& st : plain) st.trend = false;
-  DroopFit fit = fit_droop(plain);
-  if (fit.x.size() >= 2 && fit.miss_steps() <= kMaxMissSteps)
-    stairs = std::move(plain);
+  out.fit = fit_droop(plain, fixed_tau_s);
+  if (out.fit.x.size() >= 2 && out.fit.miss_steps() <= kMaxMissSteps)
+    out.stairs = std::move(plain);
   else
-    fit = fit_droop(stairs);
+    out.fit = fit_droop(out.stairs, fixed_tau_s);
+  return out;
+}
+
+std::optional<std::pair<double, double>> refit_together(
+    std::vector<Run*>& fitted, std::optional<double> fixed_tau_s = std::nullopt) {
+  auto [stairs, fit] = joint_stairs(fitted, fixed_tau_s);
   if (fit.x.size() < 2 || !(fit.miss_steps() <= kMaxMissSteps) || !(fit.mps_per_kn() > 0))
     return std::nullopt;
   for (std::size_t j = 0; j < fitted.size(); ++j) {
@@ -359,6 +381,52 @@ std::string share_roller_droop(std::vector<Run>& runs) {
     note += fmt::format(
         "; {} held run(s) would have drooped by more than a step and did not take it", refused);
   return note;
+}
+
+}  // namespace brakefit::gap
+
+namespace brakefit::gap {
+
+std::vector<DroopLagAlternative> droop_lag_alternatives(const std::vector<Run>& runs) {
+  auto fitted_of = [](std::vector<Run>& rs) {
+    std::vector<Run*> out;
+    for (Run& r : rs)
+      if (r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase)
+        out.push_back(&r);
+    return out;
+  };
+  std::vector<Run> probe = runs;
+  const std::vector<Run*> fitted = fitted_of(probe);
+  if (fitted.empty()) return {};
+  const double read_s = fitted.front()->roller_droop_lag_s;
+  JointStairs js = joint_stairs(fitted, read_s);
+  if (js.fit.x.size() < 2) return {};
+  // The lags whose fit misses the transitions by little more than the best's: within
+  // kLagAllowedF / dof of its misfit (about two standard errors of one parameter).
+  std::vector<std::pair<double, double>> profile;  // lag (s), rss (steps^2)
+  double rss_min = js.fit.rss_steps2;
+  for (double tau_s = 0; tau_s <= kDroopLags.back() + 1e-9; tau_s += kAltLagStepS) {
+    const DroopFit f = fit_droop(js.stairs, tau_s);
+    if (f.x.size() < 2 || !(f.mps_per_kn() > 0) || !std::isfinite(f.rss_steps2)) continue;
+    profile.emplace_back(tau_s, f.rss_steps2);
+    rss_min = std::min(rss_min, f.rss_steps2);
+  }
+  const double dof = std::max<double>(1.0, static_cast<double>(js.fit.rows - js.fit.cols));
+  const double allowed = rss_min * (1.0 + kLagAllowedF / dof);
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& [tau_s, rss] : profile)
+    if (rss <= allowed && std::abs(tau_s - read_s) > 0.5 * kAltLagStepS) {
+      lo = std::min(lo, tau_s);
+      hi = std::max(hi, tau_s);
+    }
+  std::vector<DroopLagAlternative> out;
+  for (const double tau_s : {lo, hi}) {
+    if (!std::isfinite(tau_s) || (!out.empty() && out.back().lag_s == tau_s)) continue;
+    DroopLagAlternative alt{tau_s, runs};
+    std::vector<Run*> again = fitted_of(alt.runs);
+    if (refit_together(again, tau_s)) out.push_back(std::move(alt));
+  }
+  return out;
 }
 
 }  // namespace brakefit::gap

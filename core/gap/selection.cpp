@@ -238,7 +238,9 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       // without it a curve that is not a Magic Formula fits alike (generator C's Burckhardt
       // tyres were named cradle_cap in 28 of 30 roller sets).
       if (inside) {
-        if (const auto missing = missing_evidence(e, models[order[k]], fits[order[k]], runs)) {
+        auto missing = missing_evidence(e, models[order[k]], fits[order[k]], runs);
+        if (!missing) missing = lag_in_the_drive(e, runs, chosen, fit, o);
+        if (missing) {
           inside = false;
           rep.notes.push_back(fmt::format(fmt::runtime(missing->note),
                                           round == 0 ? "" : fmt::format(" after {}", sel.named())));
