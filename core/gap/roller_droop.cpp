@@ -405,7 +405,9 @@ std::vector<DroopLagAlternative> droop_lag_alternatives(const std::vector<Run>& 
   // kLagAllowedF / dof of its misfit (about two standard errors of one parameter).
   std::vector<std::pair<double, double>> profile;  // lag (s), rss (steps^2)
   double rss_min = js.fit.rss_steps2;
-  for (double tau_s = 0; tau_s <= kDroopLags.back() + 1e-9; tau_s += kAltLagStepS) {
+  const auto steps = static_cast<int>(std::lround(kDroopLags.back() / kAltLagStepS));
+  for (int k = 0; k <= steps; ++k) {
+    const double tau_s = k * kAltLagStepS;
     const DroopFit f = fit_droop(js.stairs, tau_s);
     if (f.x.size() < 2 || !(f.mps_per_kn() > 0) || !std::isfinite(f.rss_steps2)) continue;
     profile.emplace_back(tau_s, f.rss_steps2);

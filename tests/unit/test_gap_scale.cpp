@@ -100,6 +100,7 @@ TEST(ManyRuns, HeldOutInAtMostSixBlocksOfConsecutiveRuns) {
     const gap::Fitter fit = [&](const std::vector<const gap::Run*>& train,
                                 const std::vector<gap::Effect>&) {
       std::vector<std::size_t> ids;
+      ids.reserve(train.size());
       for (const auto* r : train) ids.push_back(static_cast<std::size_t>(std::stoul(r->name)));
       trained_on.push_back(ids);
       gap::Fit f;
