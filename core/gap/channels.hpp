@@ -107,15 +107,26 @@ RollerDroop drooping_roller_speed(const std::vector<double>& t_s, const std::vec
 /// the runs where it was fitted, its mean speed kept (the slip recomputed). Returns a note, or
 /// empty where no run was changed.
 std::string share_roller_droop(std::vector<Run>& runs);
+/// A drooping drive's misfit at its runs' transitions (steps^2) with the droop refitted at the
+/// lag read and at lags 0-0.4 s every 25 ms, and that fit's degrees of freedom (empty where no
+/// run droops).
+struct DroopLagProfile {
+  std::vector<std::pair<double, double>> lag_rss;  ///< lag (s), misfit (steps^2)
+  double read_s = 0.0, dof = 1.0, step_s = 0.025;
+};
+DroopLagProfile droop_lag_profile(const std::vector<Run>& runs);
+/// The drooping runs refitted together with the drive's lag held at tau_s, their speeds and
+/// slips rebuilt (runs read as held keep the droop they took); false where that fit misses.
+bool refit_droop_at(std::vector<Run>& runs, double tau_s);
 /// The runs again with the drive's droop refitted at another lag its staircases allow.
 struct DroopLagAlternative {
   double lag_s = 0.0;
   std::vector<Run> runs;
 };
 /// The lags that meet the drooping runs' transitions nearly as well as the one read: their
-/// shortest and longest (none where no run droops). A lag 0.1 s off moves a 2 km/h roller
-/// drooping 1.5 mm/s per kN as a channel 16 ms late moves the force: what a named lag must beat.
-/// Runs read as held that took the station's droop keep it at the lag read.
+/// shortest and longest (none where no run droops; droop_lag.cpp). A lag 0.1 s off moves a
+/// 2 km/h roller drooping 1.5 mm/s per kN as a channel 16 ms late moves the force: what a named
+/// lag must beat.
 std::vector<DroopLagAlternative> droop_lag_alternatives(const std::vector<Run>& runs);
 /// A fifth wheel's ripple is read from its own speed on runs spanning this many revolutions.
 /// Over fewer the trend's misfit (a spline knotted every 0.75 revolutions) projects onto the

@@ -5,6 +5,7 @@
 // drive lag the transitions allow.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/gap/channels.hpp"
@@ -12,6 +13,35 @@
 #include "core/gap/internal.hpp"
 
 namespace brakefit::gap {
+
+namespace {
+
+/// How much more than the best lag's misfit at the transitions another may leave (x dof: an F of
+/// about two standard errors of one parameter).
+constexpr double kLagAllowedF = 4.0;
+
+}  // namespace
+
+std::vector<DroopLagAlternative> droop_lag_alternatives(const std::vector<Run>& runs) {
+  const DroopLagProfile p = droop_lag_profile(runs);
+  if (p.lag_rss.empty()) return {};
+  double rss_min = INFINITY;
+  for (const auto& lr : p.lag_rss) rss_min = std::min(rss_min, lr.second);
+  const double allowed = rss_min * (1.0 + kLagAllowedF / p.dof);
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& [tau_s, rss] : p.lag_rss)
+    if (rss <= allowed && std::abs(tau_s - p.read_s) > 0.5 * p.step_s) {
+      lo = std::min(lo, tau_s);
+      hi = std::max(hi, tau_s);
+    }
+  std::vector<DroopLagAlternative> out;
+  for (const double tau_s : {lo, hi}) {
+    if (!std::isfinite(tau_s) || (!out.empty() && out.back().lag_s == tau_s)) continue;
+    DroopLagAlternative alt{tau_s, runs};
+    if (refit_droop_at(alt.runs, tau_s)) out.push_back(std::move(alt));
+  }
+  return out;
+}
 
 std::optional<MissingEvidence> lag_in_the_drive(const EffectScore& e, const std::vector<Run>& runs,
                                                 const std::vector<Effect>& current,

@@ -30,9 +30,6 @@ constexpr std::size_t kTrendTransitions = 20, kRippleTransitions = 16;
 constexpr double kMinDroopSteps = 0.5;
 /// The fit's RMS miss at the transitions, in steps, above which the model is not the roller's.
 constexpr double kMaxMissSteps = 0.35;
-/// The lags droop_lag_alternatives tries (s apart), and how much more than the best fit's misfit
-/// at the transitions a lag may leave (x dof: an F of about two standard errors).
-constexpr double kAltLagStepS = 0.025, kLagAllowedF = 4.0;
 /// A run read as held takes a station's droop only where it droops by at most this many steps
 /// over the run (more, and its staircase would have shown it).
 constexpr double kMaxSharedDroopSteps = 1.0;
@@ -262,11 +259,6 @@ RollerDroop drooping_roller_speed(const std::vector<double>& t_s, const std::vec
 
 namespace {
 
-/// The runs whose droop was fitted, fitted again together: a short run's few transitions cannot
-/// tell the droop from its lag (three runs of a station with 1-5 transitions each read no lag and
-/// half the droop that a run of 11 read at 0.4 s). Each run's speed is rebuilt with the joint
-/// droop and its slip recomputed; returns the joint droop (m/s per N, lag in s), or nothing where
-/// the joint fit misses the transitions (the runs keep their own).
 /// The fitted runs' staircases, with their slow trends or without (joint_stairs).
 struct JointStairs {
   std::vector<Stair> stairs;
@@ -292,6 +284,11 @@ JointStairs joint_stairs(const std::vector<Run*>& fitted, std::optional<double> 
   return out;
 }
 
+/// The runs whose droop was fitted, fitted again together: a short run's few transitions cannot
+/// tell the droop from its lag (three runs of a station with 1-5 transitions each read no lag and
+/// half the droop that a run of 11 read at 0.4 s). Each run's speed is rebuilt with the joint
+/// droop and its slip recomputed; returns the joint droop (m/s per N, lag in s), or nothing where
+/// the joint fit misses the transitions (the runs keep their own). At fixed_tau_s where given.
 std::optional<std::pair<double, double>> refit_together(
     std::vector<Run*>& fitted, std::optional<double> fixed_tau_s = std::nullopt) {
   auto [stairs, fit] = joint_stairs(fitted, fixed_tau_s);
@@ -383,52 +380,41 @@ std::string share_roller_droop(std::vector<Run>& runs) {
   return note;
 }
 
-}  // namespace brakefit::gap
+namespace {
 
-namespace brakefit::gap {
+std::vector<Run*> drooping_runs(std::vector<Run>& runs) {
+  std::vector<Run*> out;
+  for (Run& r : runs)
+    if (r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase)
+      out.push_back(&r);
+  return out;
+}
 
-std::vector<DroopLagAlternative> droop_lag_alternatives(const std::vector<Run>& runs) {
-  auto fitted_of = [](std::vector<Run>& rs) {
-    std::vector<Run*> out;
-    for (Run& r : rs)
-      if (r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase)
-        out.push_back(&r);
-    return out;
-  };
+}  // namespace
+
+DroopLagProfile droop_lag_profile(const std::vector<Run>& runs) {
   std::vector<Run> probe = runs;
-  const std::vector<Run*> fitted = fitted_of(probe);
+  const std::vector<Run*> fitted = drooping_runs(probe);
   if (fitted.empty()) return {};
-  const double read_s = fitted.front()->roller_droop_lag_s;
-  JointStairs js = joint_stairs(fitted, read_s);
+  DroopLagProfile out;
+  out.read_s = fitted.front()->roller_droop_lag_s;
+  JointStairs js = joint_stairs(fitted, out.read_s);
   if (js.fit.x.size() < 2) return {};
-  // The lags whose fit misses the transitions by little more than the best's: within
-  // kLagAllowedF / dof of its misfit (about two standard errors of one parameter).
-  std::vector<std::pair<double, double>> profile;  // lag (s), rss (steps^2)
-  double rss_min = js.fit.rss_steps2;
-  const auto steps = static_cast<int>(std::lround(kDroopLags.back() / kAltLagStepS));
+  out.dof = std::max<double>(1.0, static_cast<double>(js.fit.rows - js.fit.cols));
+  out.lag_rss.emplace_back(out.read_s, js.fit.rss_steps2);
+  const auto steps = static_cast<int>(std::lround(kDroopLags.back() / out.step_s));
   for (int k = 0; k <= steps; ++k) {
-    const double tau_s = k * kAltLagStepS;
+    const double tau_s = k * out.step_s;
     const DroopFit f = fit_droop(js.stairs, tau_s);
-    if (f.x.size() < 2 || !(f.mps_per_kn() > 0) || !std::isfinite(f.rss_steps2)) continue;
-    profile.emplace_back(tau_s, f.rss_steps2);
-    rss_min = std::min(rss_min, f.rss_steps2);
-  }
-  const double dof = std::max<double>(1.0, static_cast<double>(js.fit.rows - js.fit.cols));
-  const double allowed = rss_min * (1.0 + kLagAllowedF / dof);
-  double lo = INFINITY, hi = -INFINITY;
-  for (const auto& [tau_s, rss] : profile)
-    if (rss <= allowed && std::abs(tau_s - read_s) > 0.5 * kAltLagStepS) {
-      lo = std::min(lo, tau_s);
-      hi = std::max(hi, tau_s);
-    }
-  std::vector<DroopLagAlternative> out;
-  for (const double tau_s : {lo, hi}) {
-    if (!std::isfinite(tau_s) || (!out.empty() && out.back().lag_s == tau_s)) continue;
-    DroopLagAlternative alt{tau_s, runs};
-    std::vector<Run*> again = fitted_of(alt.runs);
-    if (refit_together(again, tau_s)) out.push_back(std::move(alt));
+    if (f.x.size() >= 2 && f.mps_per_kn() > 0 && std::isfinite(f.rss_steps2))
+      out.lag_rss.emplace_back(tau_s, f.rss_steps2);
   }
   return out;
+}
+
+bool refit_droop_at(std::vector<Run>& runs, double tau_s) {
+  std::vector<Run*> fitted = drooping_runs(runs);
+  return !fitted.empty() && refit_together(fitted, tau_s).has_value();
 }
 
 }  // namespace brakefit::gap
