@@ -270,7 +270,7 @@ struct JointStairs {
 /// takes the droop's place (a heavy station's runs read 0.76-1.09 mm/s per kN with their trends,
 /// 1.35 together without them, the drive's 1.35). The trends come back only where the runs'
 /// transitions cannot be met without them.
-JointStairs joint_stairs(const std::vector<Run*>& fitted, std::optional<double> fixed_tau_s) {
+JointStairs joint_stairs(const std::vector<const Run*>& fitted, std::optional<double> fixed_tau_s) {
   JointStairs out;
   out.stairs.reserve(fitted.size());
   for (const Run* r : fitted) out.stairs.push_back(read_stair(view_of(*r->roller_staircase)));
@@ -291,7 +291,7 @@ JointStairs joint_stairs(const std::vector<Run*>& fitted, std::optional<double> 
 /// the joint fit misses the transitions (the runs keep their own). At fixed_tau_s where given.
 std::optional<std::pair<double, double>> refit_together(
     std::vector<Run*>& fitted, std::optional<double> fixed_tau_s = std::nullopt) {
-  auto [stairs, fit] = joint_stairs(fitted, fixed_tau_s);
+  auto [stairs, fit] = joint_stairs({fitted.begin(), fitted.end()}, fixed_tau_s);
   if (fit.x.size() < 2 || !(fit.miss_steps() <= kMaxMissSteps) || !(fit.mps_per_kn() > 0))
     return std::nullopt;
   for (std::size_t j = 0; j < fitted.size(); ++j) {
@@ -382,19 +382,16 @@ std::string share_roller_droop(std::vector<Run>& runs) {
 
 namespace {
 
-std::vector<Run*> drooping_runs(std::vector<Run>& runs) {
-  std::vector<Run*> out;
-  for (Run& r : runs)
-    if (r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase)
-      out.push_back(&r);
-  return out;
+bool droops(const Run& r) {
+  return r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase;
 }
 
 }  // namespace
 
 DroopLagProfile droop_lag_profile(const std::vector<Run>& runs) {
-  std::vector<Run> probe = runs;
-  const std::vector<Run*> fitted = drooping_runs(probe);
+  std::vector<const Run*> fitted;
+  for (const Run& r : runs)
+    if (droops(r)) fitted.push_back(&r);
   if (fitted.empty()) return {};
   DroopLagProfile out;
   out.read_s = fitted.front()->roller_droop_lag_s;
@@ -413,7 +410,9 @@ DroopLagProfile droop_lag_profile(const std::vector<Run>& runs) {
 }
 
 bool refit_droop_at(std::vector<Run>& runs, double tau_s) {
-  std::vector<Run*> fitted = drooping_runs(runs);
+  std::vector<Run*> fitted;
+  for (Run& r : runs)
+    if (droops(r)) fitted.push_back(&r);
   return !fitted.empty() && refit_together(fitted, tau_s).has_value();
 }
 
