@@ -146,8 +146,28 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // Its gain, the bite it takes, stays held out.
   const double judged_before_n = law_in_part ? in_sample_rms(rep.before) : rep.gap_before_rmse_n;
   const double judged_after_n = law_in_part ? in_sample_rms(sel.fit) : sel.heldout_n;
-  const FitQuality q =
-      fit_quality(first, runner_up, judged_before_n, judged_after_n, rep.noise_n, law_in_part, o);
+  // The best candidate of another law than the one named (its other lag aside).
+  double rival = 0.0;
+  Effect rival_effect = Effect::SlipOffset;
+  for (const auto& e : rep.effects)
+    if (names.size() == 1 && e.round == 0 && e.effect != names.front() && !is_nuisance(e.effect) &&
+        e.effect != lag_twin(names.front()) && e.gain > rival) {
+      rival = e.gain;
+      rival_effect = e.effect;
+    }
+  const bool alike = names.size() == 1 && !law_in_part &&
+                     nibbled_alike(first, rival, rep.gap_before_rmse_n, rep.noise_n, o);
+  const FitQuality q = alike ? FitQuality::Nibble
+                             : fit_quality(first, runner_up, judged_before_n, judged_after_n,
+                                           rep.noise_n, law_in_part, o);
+  if (alike)
+    veto(fmt::format("{} and {} take alike small shares of the held-out gap ({:.0f} % and {:.0f} "
+                     "%, under the fit-quality share {:.0f} %) of a baseline {:.2f}x the noise "
+                     "floor: two laws biting the same part of the curve alike show a curve that "
+                     "is not a Magic Formula there, not either effect, so no effect is named",
+                     to_string(names.front()), to_string(rival_effect), 100 * first, 100 * rival,
+                     100 * o.min_first_gain, rep.gap_before_rmse_n / rep.noise_n),
+         "passed, but vetoed by the fit-quality check (see the notes)");
   if (!names.empty() && q == FitQuality::OneBite)
     rep.notes.push_back(fmt::format(
         "{} explains only {:.0f} % of the held-out gap, under the fit-quality share ({:.0f} %), "
@@ -156,7 +176,7 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
         "named, with the gap it leaves",
         to_string(names.front()), 100 * first, 100 * o.min_first_gain,
         first / std::max(runner_up, 1e-12), runner_up));
-  if (!names.empty() && q == FitQuality::Nibble)
+  if (!names.empty() && q == FitQuality::Nibble && !alike)
     veto(fmt::format(
              "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
              "left{} against {:.1f} N of noise ({:.0f} % of the structure beyond the noise): the "

@@ -66,6 +66,13 @@ bool structured_gap_left(double before_n, double after_n, double noise_n, const 
           structure_left_share(before_n, after_n, noise_n) > o.max_structure_left_share);
 }
 
+bool nibbled_alike(double first_gain, double rival_gain, double before_n, double noise_n,
+                   const Options& o) {
+  return first_gain < o.min_first_gain && rival_gain >= o.gate_gain &&
+         first_gain - rival_gain < o.separability * first_gain &&
+         before_n > std::sqrt(2.0) * noise_n;
+}
+
 FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n, double after_n,
                        double noise_n, bool law_in_part, const Options& o) {
   // A structured gap is left above noise_factor x the floor, or where most of the structure

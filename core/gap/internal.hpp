@@ -37,6 +37,12 @@ inline constexpr double kPublishedPeakLoadExponent = 0.93;
 inline bool is_nuisance(Effect e) {
   return e == Effect::ReferenceBias || e == Effect::TyreShift;
 }
+/// The other lag: at one roller speed a relaxation length and a time offset are one observation.
+inline std::optional<Effect> lag_twin(Effect e) {
+  if (e == Effect::RelaxationLength) return Effect::TimeOffset;
+  if (e == Effect::TimeOffset) return Effect::RelaxationLength;
+  return std::nullopt;
+}
 /// Load transfer in any of its forms (free, measured at the published ratio, with E's slope).
 inline bool is_load_transfer(Effect e) {
   return e == Effect::LoadTransfer || e == Effect::LoadTransferShape ||
@@ -275,6 +281,16 @@ enum class FitQuality {
 };
 FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n, double after_n,
                        double noise_n, bool law_in_part, const Options& o);
+
+/// Two effects of different laws that take alike small shares of a structured gap: the first
+/// named effect's held-out gain (under min_first_gain) and the best other candidate's (rival_gain,
+/// not the first's other lag), within separability x the first and past the gain gate, where
+/// the baseline's gap carries at least as much structure as noise (before_n over sqrt(2) x the
+/// floor). A real effect's signature is its own; two laws biting the same part of the curve alike
+/// (a threshold's dead zone and an offset's shift at the foot of a brush-model tyre) show a curve
+/// that is not a Magic Formula there, however little is left after.
+bool nibbled_alike(double first_gain, double rival_gain, double before_n, double noise_n,
+                   const Options& o);
 
 /// A parameter at the end of its physical range (a lower end that is physical, a lag of 0, aside).
 bool at_bound(double v, const EffectParam& p);

@@ -13,23 +13,13 @@
 
 namespace brakefit::gap {
 
-namespace {
-
-std::optional<Effect> twin(Effect e) {
-  if (e == Effect::RelaxationLength) return Effect::TimeOffset;
-  if (e == Effect::TimeOffset) return Effect::RelaxationLength;
-  return std::nullopt;
-}
-
-}  // namespace
-
 std::optional<LagSwap> swap_lag_twin(const std::vector<Run>& runs,
                                      const std::vector<Effect>& chosen, double current_heldout_n,
                                      double gap_before_n, const Fit& base_fit, const Fitter& fit) {
   if (named_effects(chosen).size() < 2 || run_speed_spread(runs) < kSpeedFrictionMinSpeedSpread)
     return std::nullopt;
   for (Effect e : chosen) {
-    const auto other = twin(e);
+    const auto other = lag_twin(e);
     if (!other || std::find(chosen.begin(), chosen.end(), *other) != chosen.end()) continue;
     LagSwap s;
     s.replaced = e;

@@ -212,3 +212,28 @@ TEST(Gates, TheBicMarginIsPerPointFitted) {
   EXPECT_TRUE(rep.verdict.front() == "time_offset" || rep.verdict.front() == "relaxation_length")
       << rep.verdict.front();
 }
+
+TEST(Gates, TwoLawsBitingAlikeNameNoEffect) {
+  // Seed 500003 of the every-station draw: a truck's brush-model tyre (not a Magic Formula), five
+  // runs at 100 Hz. A slip offset of -0.001 and a brake threshold take 28 % and 26 % of the
+  // held-out gap alike, both at its foot; under the every-station gates no gap above the
+  // fit-quality factor is left, and the offset was named.
+  const auto set =
+      sim2::draw_set(can::BenchKind::Roller, "misspecified", 0.0, 500003, sim2::Stations::Every);
+  const std::vector<gap::Run> runs = test::conditioned(set, false);
+  gap::Options o = gap::calibrated_options(gap::Condition::Roller);
+  o.gate_gain = 0.169;
+  o.noise_factor = 5.92;
+  o.bic_margin_per_point = 0.3504;
+  const auto rep = gap::diagnose(runs, sim::pooled_start(runs), o);
+  EXPECT_EQ(rep.verdict, std::vector<std::string>{"none"});
+  EXPECT_TRUE(std::any_of(rep.notes.begin(), rep.notes.end(), [](const std::string& n) {
+    return n.find("alike small shares") != std::string::npos;
+  }));
+  // The rule itself: alike and small, over a gap that carries as much structure as noise.
+  EXPECT_TRUE(gap::nibbled_alike(0.285, 0.260, 1.87, 1.0, o));
+  EXPECT_FALSE(gap::nibbled_alike(0.285, 0.200, 1.87, 1.0, o));  // one stands out
+  EXPECT_FALSE(gap::nibbled_alike(0.45, 0.44, 1.87, 1.0, o));    // a large bite
+  EXPECT_FALSE(gap::nibbled_alike(0.15, 0.14, 1.3, 1.0, o));     // the floor's own scatter
+  EXPECT_FALSE(gap::nibbled_alike(0.16, 0.16, 1.87, 1.0, o));    // the rival under the gate
+}
