@@ -284,11 +284,11 @@ FitQuality fit_quality(double first_gain, double runner_up_gain, double before_n
 
 /// Two effects of different laws that take alike small shares of a structured gap: the first
 /// named effect's held-out gain (under min_first_gain) and the best other candidate's (rival_gain,
-/// not the first's other lag), within separability x the first and past the gain gate, where
-/// the baseline's gap carries at least as much structure as noise (before_n over sqrt(2) x the
-/// floor). A real effect's signature is its own; two laws biting the same part of the curve alike
-/// (a threshold's dead zone and an offset's shift at the foot of a brush-model tyre) show a curve
-/// that is not a Magic Formula there, however little is left after.
+/// not the first's other lag nor load transfer), within separability x the first or more, past
+/// the gain gate, where the baseline's gap carries at least as much structure as noise (before_n
+/// over sqrt(2) x the floor). A real effect's signature is its own; two laws biting the same part
+/// of the curve alike (a threshold's dead zone and an offset's shift at the foot of a brush-model
+/// tyre) show a curve that is not a Magic Formula there, however little is left after.
 bool nibbled_alike(double first_gain, double rival_gain, double before_n, double noise_n,
                    const Options& o);
 

@@ -228,11 +228,12 @@ TEST(Gates, TwoLawsBitingAlikeNameNoEffect) {
   const auto rep = gap::diagnose(runs, sim::pooled_start(runs), o);
   EXPECT_EQ(rep.verdict, std::vector<std::string>{"none"});
   EXPECT_TRUE(std::any_of(rep.notes.begin(), rep.notes.end(), [](const std::string& n) {
-    return n.find("alike small shares") != std::string::npos;
+    return n.find("as much or more") != std::string::npos;
   }));
   // The rule itself: alike and small, over a gap that carries as much structure as noise.
   EXPECT_TRUE(gap::nibbled_alike(0.285, 0.260, 1.87, 1.0, o));
   EXPECT_FALSE(gap::nibbled_alike(0.285, 0.200, 1.87, 1.0, o));  // one stands out
+  EXPECT_TRUE(gap::nibbled_alike(0.243, 0.347, 3.2, 1.0, o));    // the rival bit more
   EXPECT_FALSE(gap::nibbled_alike(0.45, 0.44, 1.87, 1.0, o));    // a large bite
   EXPECT_FALSE(gap::nibbled_alike(0.15, 0.14, 1.3, 1.0, o));     // the floor's own scatter
   EXPECT_FALSE(gap::nibbled_alike(0.16, 0.16, 1.87, 1.0, o));    // the rival under the gate
