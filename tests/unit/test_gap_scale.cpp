@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -189,24 +190,41 @@ TEST(TwoRuns, ATimeOffsetIsPlacedOnBothRunsRamps) {
     }
 }
 
+namespace {
+
+/// A set of the every-station roller draw, conditioned, and the gates the referee calibrated for
+/// that draw (gain 0.169, BIC 0.3504 per point, fit-quality factor 5.92).
+struct EveryStationRoller {
+  std::vector<gap::Run> runs;
+  gap::Options gates = gap::calibrated_options(gap::Condition::Roller);
+  EveryStationRoller(const std::string& effect, double magnitude, std::uint64_t seed)
+      : runs(test::conditioned(
+            sim2::draw_set(can::BenchKind::Roller, effect, magnitude, seed, sim2::Stations::Every),
+            false)) {
+    gates.gate_gain = 0.169;
+    gates.noise_factor = 5.92;
+    gates.bic_margin_per_point = 0.3504;
+  }
+  gap::Report diagnose(const gap::Options& o) const {
+    return gap::diagnose(runs, sim::pooled_start(runs), o);
+  }
+};
+
+}  // namespace
+
 TEST(Gates, TheBicMarginIsPerPointFitted) {
   // Seed 1173 of the every-station draw: a car's two runs exported at 50 Hz, the pressure channel
   // 39 ms late. Its BIC drop (a few hundred points) stays under the 701 that a 2 000-point null
   // set's drop set as one margin for every set; per point, the same null asks ~0.35 of each.
-  const auto set =
-      sim2::draw_set(can::BenchKind::Roller, "time_offset", 0.03853, 1173, sim2::Stations::Every);
-  const std::vector<gap::Run> runs = test::conditioned(set, false);
-  gap::Options o = gap::calibrated_options(gap::Condition::Roller);
-  o.gate_gain = 0.169;
-  o.noise_factor = 5.92;
-  o.bic_margin = 700.8;
-  const auto absolute = gap::diagnose(runs, sim::pooled_start(runs), o);
-  EXPECT_EQ(absolute.verdict, std::vector<std::string>{"none"});
-  o.bic_margin = 10.0;
-  o.bic_margin_per_point = 0.3504;
+  const EveryStationRoller set("time_offset", 0.03853, 1173);
+  gap::Options absolute = set.gates;
+  absolute.bic_margin = 700.8;
+  absolute.bic_margin_per_point = 0.0;
+  EXPECT_EQ(set.diagnose(absolute).verdict, std::vector<std::string>{"none"});
+  const gap::Options& o = set.gates;
   EXPECT_NEAR(gap::bic_margin_for(o, 100), 35.04, 1e-9);
   EXPECT_EQ(gap::bic_margin_for(o, 10), 10.0);  // the floor
-  const auto rep = gap::diagnose(runs, sim::pooled_start(runs), o);
+  const auto rep = set.diagnose(o);
   EXPECT_LT(gap::bic_margin_for(o, rep.before.points), 700.8);
   ASSERT_FALSE(rep.verdict.empty());
   EXPECT_TRUE(rep.verdict.front() == "time_offset" || rep.verdict.front() == "relaxation_length")
@@ -218,14 +236,9 @@ TEST(Gates, TwoLawsBitingAlikeNameNoEffect) {
   // runs at 100 Hz. A slip offset of -0.001 and a brake threshold take 28 % and 26 % of the
   // held-out gap alike, both at its foot; under the every-station gates no gap above the
   // fit-quality factor is left, and the offset was named.
-  const auto set =
-      sim2::draw_set(can::BenchKind::Roller, "misspecified", 0.0, 500003, sim2::Stations::Every);
-  const std::vector<gap::Run> runs = test::conditioned(set, false);
-  gap::Options o = gap::calibrated_options(gap::Condition::Roller);
-  o.gate_gain = 0.169;
-  o.noise_factor = 5.92;
-  o.bic_margin_per_point = 0.3504;
-  const auto rep = gap::diagnose(runs, sim::pooled_start(runs), o);
+  const EveryStationRoller set("misspecified", 0.0, 500003);
+  const gap::Options& o = set.gates;
+  const auto rep = set.diagnose(o);
   EXPECT_EQ(rep.verdict, std::vector<std::string>{"none"});
   EXPECT_TRUE(std::any_of(rep.notes.begin(), rep.notes.end(), [](const std::string& n) {
     return n.find("as much or more") != std::string::npos;
