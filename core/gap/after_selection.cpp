@@ -127,12 +127,24 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
   const std::vector<Effect> names = named_effects(sel.chosen);
   double first = 0.0, runner_up = 0.0;  // runner_up: the largest other round-1 gain
+  // rival: the largest round-1 gain of another law than the one named: not its other lag, and
+  // not load transfer, whose one ratio stands for a family of laws and, with the deceleration
+  // following the force, reshapes any curve in part (speed friction at one speed: 31 % beside
+  // load transfer's 31 %).
+  double rival = 0.0;
+  Effect rival_effect = Effect::SlipOffset;
   for (const auto& e : rep.effects) {
     if (names.empty()) break;
-    if (e.effect == names.front())
+    if (e.effect == names.front()) {
       first = e.gain;
-    else if (e.round == 0)
+    } else if (e.round == 0) {
       runner_up = std::max(runner_up, e.gain);
+      if (!is_nuisance(e.effect) && e.effect != lag_twin(names.front()) &&
+          !is_load_transfer(e.effect) && e.gain > rival) {
+        rival = e.gain;
+        rival_effect = e.effect;
+      }
+    }
   }
   // Two or more named: the share they explain together (a pair's members may each bend the
   // curve against the other alone).
@@ -146,24 +158,8 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // Its gain, the bite it takes, stays held out.
   const double judged_before_n = law_in_part ? in_sample_rms(rep.before) : rep.gap_before_rmse_n;
   const double judged_after_n = law_in_part ? in_sample_rms(sel.fit) : sel.heldout_n;
-  // The best candidate of another law than the one named: not its other lag, and not load
-  // transfer, whose one ratio stands for a family of laws and, with the deceleration following
-  // the force, reshapes any curve in part (generator A's speed friction at one speed: 31 % beside
-  // load transfer's 31 %).
-  double rival = 0.0;
-  Effect rival_effect = Effect::SlipOffset;
-  for (const auto& e : rep.effects)
-    if (names.size() == 1 && e.round == 0 && e.effect != names.front() && !is_nuisance(e.effect) &&
-        e.effect != lag_twin(names.front()) && !is_load_transfer(e.effect) && e.gain > rival) {
-      rival = e.gain;
-      rival_effect = e.effect;
-    }
-  const bool alike = names.size() == 1 && !law_in_part &&
-                     nibbled_alike(first, rival, rep.gap_before_rmse_n, rep.noise_n, o);
-  const FitQuality q = alike ? FitQuality::Nibble
-                             : fit_quality(first, runner_up, judged_before_n, judged_after_n,
-                                           rep.noise_n, law_in_part, o);
-  if (alike)
+  if (names.size() == 1 && !law_in_part &&
+      nibbled_alike(first, rival, rep.gap_before_rmse_n, rep.noise_n, o)) {
     veto(fmt::format("{} takes a small share of the held-out gap ({:.0f} %, under the "
                      "fit-quality share {:.0f} %) of a baseline {:.2f}x the noise floor, and {}, "
                      "another law, as much or more ({:.0f} %): two laws biting the same part of "
@@ -172,23 +168,29 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
                      to_string(names.front()), 100 * first, 100 * o.min_first_gain,
                      rep.gap_before_rmse_n / rep.noise_n, to_string(rival_effect), 100 * rival),
          "passed, but vetoed by the fit-quality check (see the notes)");
-  if (!names.empty() && q == FitQuality::OneBite)
-    rep.notes.push_back(fmt::format(
-        "{} explains only {:.0f} % of the held-out gap, under the fit-quality share ({:.0f} %), "
-        "but {:.1f}x the gain of any other candidate ({:.3f}): one effect stands out, which a "
-        "curve that is not a Magic Formula does not give (its candidates nibble alike); it is "
-        "named, with the gap it leaves",
-        to_string(names.front()), 100 * first, 100 * o.min_first_gain,
-        first / std::max(runner_up, 1e-12), runner_up));
-  if (!names.empty() && q == FitQuality::Nibble && !alike)
-    veto(fmt::format(
-             "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
-             "left{} against {:.1f} N of noise ({:.0f} % of the structure beyond the noise): the "
-             "residual has a structure no candidate explains (is the curve a Magic Formula?), so "
-             "no effect is named",
-             to_string(names.front()), 100 * first, judged_after_n, law_in_part ? " in-sample" : "",
-             rep.noise_n, 100 * structure_left_share(judged_before_n, judged_after_n, rep.noise_n)),
-         "passed, but vetoed by the fit-quality check (see the notes)");
+  } else if (!names.empty()) {
+    const FitQuality q =
+        fit_quality(first, runner_up, judged_before_n, judged_after_n, rep.noise_n, law_in_part, o);
+    if (q == FitQuality::OneBite)
+      rep.notes.push_back(fmt::format(
+          "{} explains only {:.0f} % of the held-out gap, under the fit-quality share ({:.0f} %), "
+          "but {:.1f}x the gain of any other candidate ({:.3f}): one effect stands out, which a "
+          "curve that is not a Magic Formula does not give (its candidates nibble alike); it is "
+          "named, with the gap it leaves",
+          to_string(names.front()), 100 * first, 100 * o.min_first_gain,
+          first / std::max(runner_up, 1e-12), runner_up));
+    if (q == FitQuality::Nibble)
+      veto(
+          fmt::format(
+              "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
+              "left{} against {:.1f} N of noise ({:.0f} % of the structure beyond the noise): the "
+              "residual has a structure no candidate explains (is the curve a Magic Formula?), so "
+              "no effect is named",
+              to_string(names.front()), 100 * first, judged_after_n,
+              law_in_part ? " in-sample" : "", rep.noise_n,
+              100 * structure_left_share(judged_before_n, judged_after_n, rep.noise_n)),
+          "passed, but vetoed by the fit-quality check (see the notes)");
+  }
   // Nothing to explain: the baseline's held-out gap is within the noise floor (below
   // min_gap_over_floor x the floor, the floor's own uncertainty allowed for). A candidate may
   // still take a structure smaller than the noise past low gates (generator B's ground nulls

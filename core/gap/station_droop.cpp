@@ -28,6 +28,11 @@ using droop::Stair;
 /// over the run (more, and its staircase would have shown it).
 constexpr double kMaxSharedDroopSteps = 1.0;
 
+/// A roller run whose own staircase drooped (its droop fitted, its staircase kept).
+bool droops(const Run& r) {
+  return r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase;
+}
+
 /// The fitted runs' staircases, with their slow trends or without (joint_stairs).
 struct JointStairs {
   std::vector<Stair> stairs;
@@ -88,8 +93,7 @@ std::optional<std::pair<double, double>> refit_together(
 std::string share_roller_droop(std::vector<Run>& runs) {
   std::vector<Run*> fitted;
   for (Run& r : runs)
-    if (r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase)
-      fitted.push_back(&r);
+    if (droops(r)) fitted.push_back(&r);
   if (fitted.empty()) return {};
   // In the order of their own droops (the joint fit's columns, and the median where it misses).
   std::sort(fitted.begin(), fitted.end(), [](const Run* a, const Run* b) {
@@ -149,14 +153,6 @@ std::string share_roller_droop(std::vector<Run>& runs) {
         "; {} held run(s) would have drooped by more than a step and did not take it", refused);
   return note;
 }
-
-namespace {
-
-bool droops(const Run& r) {
-  return r.bench == can::BenchKind::Roller && r.roller_droop_mps_per_n > 0 && r.roller_staircase;
-}
-
-}  // namespace
 
 DroopLagProfile droop_lag_profile(const std::vector<Run>& runs) {
   std::vector<const Run*> fitted;
