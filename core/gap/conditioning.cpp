@@ -371,76 +371,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   if (const StartLine slip = start_line(full.t_s, full.slip, kInitialWindowS); slip.points >= 3)
     full.initial_slip_rate_per_s = std::max(0.0, slip.slope);
   full.initial_force_n = start_line(full.t_s, full.force_n, 0.02).at_start;
-  // Decimate uniformly in time. (Uniform in slip progress was tried: it over-weights the runaway
-  // after the peak, where slip is measured across only one or two frames, and the null case got
-  // worse: 147 N instead of 7 N.)
-  const std::size_t n = full.t_s.size();
-  if (n <= o.max_points) return full;
-  std::vector<std::size_t> idx;
-  for (std::size_t k = 0; k < o.max_points; ++k) idx.push_back(k * (n - 1) / (o.max_points - 1));
-  Run r;
-  r.name = full.name;
-  r.bench = full.bench;
-  r.wheel_radius_m = full.wheel_radius_m;
-  r.brake_gain_n_per_bar = full.brake_gain_n_per_bar;
-  r.noise_n = full.noise_n;
-  r.pressure_filter_s = full.pressure_filter_s;
-  r.v_ref_sd_mps = full.v_ref_sd_mps;
-  r.v_wheel_sd_mps = full.v_wheel_sd_mps;
-  r.v_ref_step_mps = full.v_ref_step_mps;
-  r.v_wheel_step_mps = full.v_wheel_step_mps;
-  r.force_step_n = full.force_step_n;
-  r.ref_bias_bound = full.ref_bias_bound;
-  r.rest_slip_sum = full.rest_slip_sum;
-  r.rest_slip_sq_sum = full.rest_slip_sq_sum;
-  r.rest_slip_points = full.rest_slip_points;
-  r.initial_slip_rate_per_s = full.initial_slip_rate_per_s;
-  r.initial_force_n = full.initial_force_n;
-  r.runaway = full.runaway;
-  r.runaway_force_n = full.runaway_force_n;
-  r.ref_ripple_from_speed = full.ref_ripple_from_speed;
-  r.ref_ripple_amplitude = full.ref_ripple_amplitude;
-  r.ref_ripple_c = full.ref_ripple_c;
-  r.ref_ripple_s = full.ref_ripple_s;
-  r.slip_sd_unmeasured = full.slip_sd_unmeasured;
-  r.slip_noise = full.slip_noise;
-  r.held_level_mps = full.held_level_mps;
-  r.held_step_mps = full.held_step_mps;
-  r.held_until_s = full.held_until_s;
-  r.roller_droop_mps_per_n = full.roller_droop_mps_per_n;
-  r.roller_droop_lag_s = full.roller_droop_lag_s;
-  r.roller_held_quantised = full.roller_held_quantised;
-  r.roller_staircase = full.roller_staircase;
-  for (std::size_t i : idx) {
-    r.t_s.push_back(full.t_s[i]);
-    r.slip.push_back(full.slip[i]);
-    r.slip_sd.push_back(full.slip_sd[i]);
-    r.v_ref_mps.push_back(full.v_ref_mps[i]);
-    r.force_n.push_back(full.force_n[i]);
-    r.wheel_accel_mps2.push_back(full.wheel_accel_mps2[i]);
-    r.wheel_angle_rad.push_back(full.wheel_angle_rad[i]);
-    r.ref_angle_rad.push_back(full.ref_angle_rad[i]);
-    for (std::size_t k = 0; k < 2; ++k) {
-      r.encoder_wave[k].cos.push_back(full.encoder_wave[k].cos[i]);
-      r.encoder_wave[k].sin.push_back(full.encoder_wave[k].sin[i]);
-    }
-    r.ref_decel_mps2.push_back(full.ref_decel_mps2[i]);
-    r.pressure_rate_bar_per_s.push_back(full.pressure_rate_bar_per_s[i]);
-  }
-  return r;
-}
-
-std::size_t points_per_run(std::size_t n_runs) {
-  constexpr std::size_t kPerRun = ConditionOptions{}.max_points, kBudget = 2400, kFloor = 120;
-  if (n_runs == 0) return kPerRun;
-  return std::clamp(kBudget / n_runs, kFloor, kPerRun);
-}
-
-double relative_cost(std::size_t n_runs) {
-  const double points = static_cast<double>(n_runs * points_per_run(n_runs));
-  const double folds =
-      static_cast<double>(n_runs == 2 ? 2 * kTwoRunBlocks : std::min(n_runs, kMaxFolds));
-  return points * folds / (3.0 * ConditionOptions{}.max_points * 3.0);
+  return decimate(std::move(full), o.max_points);
 }
 
 }  // namespace brakefit::gap

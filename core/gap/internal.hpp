@@ -222,6 +222,9 @@ std::string reach_note(const std::vector<EffectReach>& reach, double max_decel_m
 /// speed beside full's reference.
 std::size_t runaway_cut(Run& full, const std::vector<double>& v_wheel, can::BenchKind bench,
                         double runaway_slip_per_sample);
+/// A conditioned run decimated uniformly in time to max_points (decimation.cpp): every
+/// per-sample series picked at the same samples, the run's scalars kept.
+Run decimate(Run full, std::size_t max_points);
 /// Forward selection on held-out error, shared by both modes: rep holds the baseline (before,
 /// gap_before_rmse_n, noise_n); fills effects, accepted, after, gap_after_rmse_n, verdict, notes.
 /// ripple_per_candidate: the largest gains are scored again with the encoders' ripple estimated
