@@ -14,9 +14,13 @@
 #include <stdexcept>
 
 #include "core/curve.hpp"
+#include "daemon/store_sql.hpp"
 #include "daemon/wal_check.hpp"
 
 namespace brakefit::daemon {
+
+using sql::exec;
+using sql::Stmt;
 
 namespace {
 
@@ -47,25 +51,6 @@ CREATE TABLE IF NOT EXISTS samples (
 CREATE INDEX IF NOT EXISTS events_created ON events(created_unix_s);
 )sql";
 
-struct Stmt {
-  sqlite3_stmt* s = nullptr;
-  Stmt(sqlite3* db, const char* sql) {
-    if (sqlite3_prepare_v2(db, sql, -1, &s, nullptr) != SQLITE_OK)
-      throw std::runtime_error(fmt::format("sqlite: {}: {}", sql, sqlite3_errmsg(db)));
-  }
-  ~Stmt() { sqlite3_finalize(s); }
-  Stmt(const Stmt&) = delete;
-  Stmt& operator=(const Stmt&) = delete;
-  void text(int i, const std::string& v) {
-    sqlite3_bind_text(s, i, v.c_str(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
-  }
-  void i64(int i, std::int64_t v) { sqlite3_bind_int64(s, i, v); }
-  std::string col_text(int i) const {
-    const auto* p = sqlite3_column_text(s, i);
-    return p ? reinterpret_cast<const char*>(p) : "";
-  }
-};
-
 /// Stores made before the uid column get it (NULL for their rows).
 bool has_uid_column(sqlite3* db) {
   Stmt st(db, "PRAGMA table_info(events)");
@@ -73,40 +58,6 @@ bool has_uid_column(sqlite3* db) {
     if (st.col_text(1) == "uid") return true;
   return false;
 }
-
-void exec(sqlite3* db, const char* sql) {
-  char* err = nullptr;
-  if (sqlite3_exec(db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
-    const std::string msg = err ? err : "?";
-    sqlite3_free(err);
-    throw std::runtime_error(fmt::format("sqlite: {}: {}", sql, msg));
-  }
-}
-
-StoredEvent row(const Stmt& st) {
-  StoredEvent e;
-  e.id = sqlite3_column_int64(st.s, 0);
-  e.created_unix_s = sqlite3_column_int64(st.s, 1);
-  e.source = st.col_text(2);
-  e.vehicle_id = st.col_text(3);
-  e.pipeline_event_id = sqlite3_column_int(st.s, 4);
-  e.bench = st.col_text(5);
-  e.t_start_ns = sqlite3_column_int64(st.s, 6);
-  e.t_end_ns = sqlite3_column_int64(st.s, 7);
-  e.end_reason = st.col_text(8);
-  e.flags = st.col_text(9);
-  e.points = sqlite3_column_int64(st.s, 10);
-  e.model_hash = st.col_text(11);
-  e.samples_stored = sqlite3_column_int(st.s, 12) != 0;
-  e.calibration_toml = st.col_text(13);
-  e.result_json = st.col_text(14);
-  e.uid = st.col_text(15);
-  return e;
-}
-
-constexpr const char* kCols =
-    "id, created_unix_s, source, vehicle_id, pipeline_event_id, bench, t_start_ns, t_end_ns, "
-    "end_reason, flags, points, model_hash, samples_stored, calibration_toml, result_json, uid";
 
 /// SQLite says only "unable to open database file"; the system's reason is found first.
 void check_path(const std::string& path, bool read_only) {
@@ -310,19 +261,6 @@ std::optional<std::int64_t> EventStore::commit(
       samples_stored);
 }
 
-std::optional<std::int64_t> EventStore::find(const EventRecord& r) const {
-  Stmt st(db_, "SELECT id FROM events WHERE uid = ?");
-  st.text(1, r.uid);
-  if (sqlite3_step(st.s) != SQLITE_ROW) return std::nullopt;
-  return sqlite3_column_int64(st.s, 0);
-}
-
-std::optional<StoredEvent> EventStore::last() const {
-  Stmt st(db_, fmt::format("SELECT {} FROM events ORDER BY id DESC LIMIT 1", kCols).c_str());
-  if (sqlite3_step(st.s) != SQLITE_ROW) return std::nullopt;
-  return row(st);
-}
-
 int EventStore::apply_retention(std::int64_t now_unix_s) {
   const auto cutoff = now_unix_s - static_cast<std::int64_t>(cfg_.retention_days * 86400.0);
   // sqlite3_changes() keeps the last statement that completed: counted only when this one did.
@@ -334,77 +272,6 @@ int EventStore::apply_retention(std::int64_t now_unix_s) {
   b.i64(1, cfg_.max_events);
   if (sqlite3_step(b.s) == SQLITE_DONE) n += sqlite3_changes(db_);
   return n;
-}
-
-std::vector<StoredEvent> EventStore::list(int limit) const {
-  Stmt st(db_, fmt::format("SELECT {} FROM events ORDER BY id DESC LIMIT ?", kCols).c_str());
-  st.i64(1, limit);
-  std::vector<StoredEvent> out;
-  while (sqlite3_step(st.s) == SQLITE_ROW) out.push_back(row(st));
-  return out;
-}
-
-std::vector<StoredEvent> EventStore::after(std::int64_t after_id, std::int64_t min_created_unix_s,
-                                           int limit) const {
-  Stmt st(db_, fmt::format("SELECT {} FROM events WHERE id > ? AND created_unix_s >= ? ORDER BY id "
-                           "LIMIT ?",
-                           kCols)
-                   .c_str());
-  st.i64(1, after_id);
-  st.i64(2, min_created_unix_s);
-  st.i64(3, limit);
-  std::vector<StoredEvent> out;
-  while (sqlite3_step(st.s) == SQLITE_ROW) out.push_back(row(st));
-  return out;
-}
-
-std::int64_t EventStore::count_after(std::int64_t after_id, std::int64_t min_created_unix_s) const {
-  Stmt st(db_, "SELECT COUNT(*) FROM events WHERE id > ? AND created_unix_s >= ?");
-  st.i64(1, after_id);
-  st.i64(2, min_created_unix_s);
-  sqlite3_step(st.s);
-  return sqlite3_column_int64(st.s, 0);
-}
-
-std::string EventStore::samples_blob(std::int64_t id, std::int64_t* count) const {
-  Stmt st(db_, "SELECT data, count FROM samples WHERE event_id = ?");
-  st.i64(1, id);
-  if (sqlite3_step(st.s) != SQLITE_ROW) return {};
-  if (count) *count = sqlite3_column_int64(st.s, 1);
-  const auto* p = static_cast<const char*>(sqlite3_column_blob(st.s, 0));
-  return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(st.s, 0)))
-           : std::string();
-}
-
-std::optional<StoredEvent> EventStore::get(std::int64_t id) const {
-  Stmt st(db_, fmt::format("SELECT {} FROM events WHERE id = ?", kCols).c_str());
-  st.i64(1, id);
-  if (sqlite3_step(st.s) != SQLITE_ROW) return std::nullopt;
-  return row(st);
-}
-
-std::vector<pipeline::Sample> EventStore::samples(std::int64_t id) const {
-  Stmt st(db_, "SELECT data FROM samples WHERE event_id = ?");
-  st.i64(1, id);
-  if (sqlite3_step(st.s) != SQLITE_ROW) return {};
-  return unpack_samples(sqlite3_column_blob(st.s, 0),
-                        static_cast<std::size_t>(sqlite3_column_bytes(st.s, 0)));
-}
-
-std::int64_t EventStore::count() const {
-  Stmt st(db_, "SELECT COUNT(*) FROM events");
-  sqlite3_step(st.s);
-  return sqlite3_column_int64(st.s, 0);
-}
-
-std::string EventStore::integrity_check() const {
-  Stmt st(db_, "PRAGMA integrity_check");
-  std::string out;
-  while (sqlite3_step(st.s) == SQLITE_ROW) {
-    if (!out.empty()) out.push_back('\n');
-    out.append(st.col_text(0));
-  }
-  return out;
 }
 
 void EventStore::set_max_pages(int pages) {
