@@ -126,7 +126,9 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
   const std::vector<Effect> names = named_effects(sel.chosen);
-  double first = 0.0, runner_up = 0.0;  // runner_up: the largest other round-1 gain
+  // runner_up: the largest other round-1 gain. Neither it nor the rival is a degenerate fit (a
+  // threshold whose tyre carries no force repeats the measured force: a large gain, no law).
+  double first = 0.0, runner_up = 0.0;
   // rival: the largest round-1 gain of another law than the one named: not its other lag, and
   // not load transfer, whose one ratio stands for a family of laws and, with the deceleration
   // following the force, reshapes any curve in part (speed friction at one speed: 31 % beside
@@ -137,7 +139,7 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
     if (names.empty()) break;
     if (e.effect == names.front()) {
       first = e.gain;
-    } else if (e.round == 0) {
+    } else if (e.round == 0 && !e.degenerate) {
       runner_up = std::max(runner_up, e.gain);
       if (!is_nuisance(e.effect) && e.effect != lag_twin(names.front()) &&
           !is_load_transfer(e.effect) && e.gain > rival) {

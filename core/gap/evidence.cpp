@@ -165,7 +165,7 @@ std::optional<MissingEvidence> threshold_without_a_curve(const EffectScore& e, c
           "carries none of it (a tyre that locks keeps at least {:.0f} %); not accepted",
           e.params[0].second, e.gain, peak_n, 100 * peak_n / force_max_n, force_max_n,
           100 * kThresholdMinCurveShare),
-      "the fitted tyre carries no force"};
+      "the fitted tyre carries no force", true};
 }
 
 }  // namespace

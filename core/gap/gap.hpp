@@ -292,6 +292,9 @@ struct EffectScore {
   /// selection added in its round k+1, scored against the model chosen before it.
   int round = 0;
   std::string decision;  ///< why it was or was not accepted, in words
+  /// Its fit is no model of the tyre (evidence.cpp: a threshold whose curve carries no force):
+  /// its gain is left out of the runner-up, the rival and the pairs.
+  bool degenerate = false;
 };
 
 struct WhereRow {

@@ -110,6 +110,9 @@ inline constexpr double kDeadZoneMaxSlipRatio = 0.25;
 /// the note (with {} where the round's "after ..." goes) and the score's decision.
 struct MissingEvidence {
   std::string note, decision;
+  /// The fit is no model of the tyre at all (a threshold whose curve carries no force repeats
+  /// the measured force): its gain is no law's bite, and no other candidate is judged by it.
+  bool degenerate = false;
 };
 /// Below this reference speed a sample is not taken (the slip's ratio would blow up).
 inline constexpr double kMinRefSpeedMps = 0.3;

@@ -245,6 +245,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
           rep.notes.push_back(fmt::format(fmt::runtime(missing->note),
                                           round == 0 ? "" : fmt::format(" after {}", sel.named())));
           e.decision = missing->decision;
+          e.degenerate = missing->degenerate;
         }
       }
       if (inside) pick = k;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <string>
 
@@ -18,19 +19,20 @@ using namespace brakefit;
 namespace {
 
 /// The referee's pair trial `index` as `bench/gap_referee --pairs` draws and seeds it (seed 1),
-/// diagnosed under the condition's shipped gates.
+/// diagnosed under the condition's shipped gates (or those given).
 struct RefereePair {
   sim::Injection inj;
   sim::TrialResult res;
   std::string why;  ///< its scores and notes, for a failure's message
 };
-RefereePair referee_pair(gap::Condition c, sim::Generator g, int index) {
+RefereePair referee_pair(gap::Condition c, sim::Generator g, int index,
+                         std::optional<gap::Options> gates = std::nullopt) {
   const auto cn = static_cast<std::uint64_t>(c);
   Rng rng(1 + 300 * cn + 7);
   RefereePair p;
   for (int t = 0; t <= index; ++t) p.inj = sim::draw_pair(rng, c, g);
   p.res = sim::run_trial(p.inj, 1000 + 700'000 + static_cast<std::uint64_t>(index) + 100'000 * cn,
-                         gap::calibrated_options(c));
+                         gates.value_or(gap::calibrated_options(c)));
   for (const auto& s : p.res.scores) p.why += "\n  " + s;
   for (const auto& s : p.res.notes) p.why += "\n  " + s;
   return p;
@@ -300,4 +302,28 @@ TEST(GapPairs, LoadTransferWithSpeedFrictionIsJudgedOnAllRuns) {
   EXPECT_TRUE(std::any_of(res.notes.begin(), res.notes.end(), [](const std::string& n) {
     return n.find("N in-sample") != std::string::npos;
   })) << why;
+}
+
+// A threshold whose fitted tyre carries no force repeats the measured force (its gain is no
+// law's): it is refused, and neither rivals the law named nor stands as the runner-up. Generator
+// B's ground pair 39 from every export (a relaxation length with speed friction, two runs of a
+// truck): the threshold fits at 2.4 bar with a curve peaking at 0 N (gain 0.74), and the
+// relaxation length's 34 % was vetoed as two laws biting alike.
+TEST(GapPairs, ATyreCarryingNoForceIsNoRivalLaw) {
+  sim::set_generator_b_stations(sim2::Stations::Every);
+  struct Restore {
+    ~Restore() { sim::set_generator_b_stations(sim2::Stations::Cars); }
+  } restore;
+  gap::Options gates = gap::calibrated_options(gap::Condition::Ground);
+  gates.gate_gain = 0.101;  // the referee's every-export ground gates
+  gates.bic_margin_per_point = 0.2379;
+  gates.noise_factor = 2.13;
+  const RefereePair p = referee_pair(gap::Condition::Ground, sim::Generator::B, 39, gates);
+  ASSERT_EQ(p.inj.effect, "relaxation_length") << p.why;
+  auto noted = [&](const std::string& what) {
+    return std::any_of(p.res.notes.begin(), p.res.notes.end(),
+                       [&](const std::string& n) { return n.find(what) != std::string::npos; });
+  };
+  EXPECT_TRUE(noted("only with a tyre curve that peaks at")) << p.why;
+  EXPECT_FALSE(noted("brake_threshold, another law")) << p.why;
 }
