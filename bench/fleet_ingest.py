@@ -34,7 +34,7 @@ os.environ.setdefault("BRAKEFIT_ROOT", ROOT)
 os.environ.setdefault("BRAKEFIT_BIN", os.path.join(ROOT, "build/release/cli/brakefit"))
 os.environ.setdefault("BRAKEFITD_BIN", os.path.join(ROOT, "build/release/daemon/brakefitd"))
 import pgserver  # noqa: E402
-import test_fleet as tf  # noqa: E402  (the stores are made as the tests make them)
+import fleet_harness as tf  # noqa: E402  (the stores are made as the tests make them)
 
 CLI = os.environ["BRAKEFIT_BIN"]
 SYNC = CLI + "-sync"  # brakefit-sync, beside brakefit in the build tree
