@@ -69,6 +69,31 @@ TEST(GapEvidence, ABrakeThresholdNeedsAWheelRollingFreeBelowIt) {
   EXPECT_FALSE(gap::missing_evidence(s, {s.effect}, f, {late, late}).has_value());
 }
 
+// A wheel read in coarse steps is rebuilt between its transitions up to half a step off: a dead
+// zone's slip moved by less than that is not shown to move, however small the curve's share.
+TEST(GapEvidence, ADeadZonesSlipIsJudgedNoFinerThanTheWheelsQuantisation) {
+  const auto [s, f] = candidate(gap::Effect::BrakeThreshold, "p0_bar", 2.0);
+  auto run = [](bool dead_zone, double step_mps) {
+    gap::Run r = rise(dead_zone);
+    r.v_ref_mps.assign(r.t_s.size(), 1.4);
+    r.v_wheel_step_mps = step_mps;
+    // The slip drifts by 40 % of what the curve gives below the threshold: 30 % above its rest.
+    for (std::size_t i = 0; i < r.slip.size(); ++i)
+      if (r.force_n[i] < 120.0) r.slip[i] += 0.4 * r.force_n[i] / 80'000.0;
+    return r;
+  };
+  // Unquantised: 30 % is more than a dead zone moves.
+  EXPECT_TRUE(gap::missing_evidence(s, {s.effect}, f, {run(true, 0), run(true, 0)}).has_value());
+  // 1 mm/s steps at 1.4 m/s: half a step is 3.6e-4 of slip, more than the drift.
+  EXPECT_FALSE(
+      gap::missing_evidence(s, {s.effect}, f, {run(true, 1e-3), run(true, 1e-3)}).has_value());
+  // A steep foot (the slip follows the force all the way) is still seen through those steps.
+  const auto missing =
+      gap::missing_evidence(s, {s.effect}, f, {run(false, 1e-3), run(false, 1e-3)});
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_NE(missing->note.find("half the wheel's quantisation step"), std::string::npos);
+}
+
 TEST(GapEvidence, ABrakeThresholdMustLeaveTheTyreItsCurve) {
   // Below the threshold the model repeats the measured force: a threshold near the runs' top
   // pressure fits them with a curve that carries nothing (D at zero). The runs' force reaches
