@@ -213,8 +213,8 @@ std::optional<MissingEvidence> missing_evidence(const EffectScore& e,
                                   [](const Run& r) { return r.bench == can::BenchKind::Roller; });
   if (e.effect == Effect::BrakeThreshold && roller) {
     // A slip moved by under half a quantisation step of the wheel is not shown to move: a
-    // rebuilt staircase is that far off between its transitions (a car's 2.9 bar dead zone at
-    // 5.3 km/h moved 0.43 steps where the curve gives 1.7: 25 %).
+    // rebuilt staircase is that far off between its transitions, so where the curve's own
+    // movement spans a step or two the 0.25 share is finer than the channel can say.
     const auto [ratio, resolution] =
         dead_zone_slip_ratio(runs, e.params[0].second, f.slip_stiffness_n());
     const double limit = std::max(kDeadZoneMaxSlipRatio, resolution);
