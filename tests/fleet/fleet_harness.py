@@ -4,14 +4,12 @@ into a backlog, `brakefit sync` run once or as a service, and what the server ho
 Each test module starts its own server (set_up/tear_down as its module fixtures)."""
 import json
 import os
-import re
 import shutil
 import signal
 import sqlite3
 import subprocess
 import tempfile
 import time
-import unittest
 import uuid
 
 import pgserver

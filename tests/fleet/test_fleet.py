@@ -20,7 +20,7 @@ import unittest
 
 import fleet_harness as h
 from fleet_harness import (CLI, HOSTILE, ROOT, Station, run_cli, replay_into, clone_rows, age_rows,
-                           store_uids, central, write)
+                           store_uids, central)
 
 setUpModule = h.set_up
 tearDownModule = h.tear_down

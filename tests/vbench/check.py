@@ -12,8 +12,7 @@ import struct
 import subprocess
 import sys
 
-from readings import (count_series, f32, link_tx, net_counts, pressure_lag_ms, read_frames,
-                      regs, u32)
+from readings import f32, link_tx, net_counts, pressure_lag_ms, read_frames, regs, u32
 
 ROOT, BUILD, OUT, SCALE = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
 BRAKEFIT = os.path.join(BUILD, "cli", "brakefit")
