@@ -39,6 +39,70 @@ void take(Report& rep, Selection& sel, Found& found, const Options& o) {
   sel.heldout_n = found.heldout_n;
 }
 
+/// The fit-quality check's reading of what the selection names (see check_selection).
+struct Quality {
+  enum Verdict { Nothing, Pass, OneBite, Alike, Nibble } verdict = Nothing;
+  double first = 0, runner_up = 0, rival = 0;
+  Effect rival_effect = Effect::SlipOffset;
+  bool law_in_part = false;
+  double judged_before_n = 0, judged_after_n = 0;
+  /// Vetoed: nothing would be named.
+  [[nodiscard]] bool vetoed() const { return verdict == Alike || verdict == Nibble; }
+};
+
+Quality judge_quality(const Report& rep, const Selection& sel, const Options& o) {
+  Quality q;
+  const std::vector<Effect> names = named_effects(sel.chosen);
+  if (names.empty()) return q;
+  // runner_up: the largest other round-1 gain. Neither it nor the rival is a degenerate fit (a
+  // threshold whose tyre carries no force repeats the measured force: a large gain, no law).
+  // rival: the largest round-1 gain of another law than the one named: not its other lag, and
+  // not load transfer, whose one ratio stands for a family of laws and, with the deceleration
+  // following the force, reshapes any curve in part (speed friction at one speed: 31 % beside
+  // load transfer's 31 %).
+  for (const auto& e : rep.effects) {
+    if (e.effect == names.front()) {
+      q.first = e.gain;
+    } else if (e.round == 0 && !e.degenerate) {
+      q.runner_up = std::max(q.runner_up, e.gain);
+      if (!is_nuisance(e.effect) && e.effect != lag_twin(names.front()) &&
+          !is_load_transfer(e.effect) && e.gain > q.rival) {
+        q.rival = e.gain;
+        q.rival_effect = e.effect;
+      }
+    }
+  }
+  // Two or more named: the share they explain together (a pair's members may each bend the
+  // curve against the other alone).
+  if (names.size() > 1)
+    q.first = std::max(q.first, 1.0 - sel.heldout_n / std::max(rep.gap_before_rmse_n, 1e-12));
+  // Load transfer's law is one stiffness ratio for a tyre's own load laws of D, Kx and E.
+  q.law_in_part = is_load_transfer(names.front());
+  // Whether a structured gap is left is judged on every run at once where load transfer leads:
+  // left out, a run's load and its peak trade (the deceleration follows this wheel's force), so
+  // the fastest run predicted from slower ones is off by more than the effect leaves (gap.md §9).
+  // Its gain, the bite it takes, stays held out.
+  q.judged_before_n = q.law_in_part ? in_sample_rms(rep.before) : rep.gap_before_rmse_n;
+  q.judged_after_n = q.law_in_part ? in_sample_rms(sel.fit) : sel.heldout_n;
+  if (names.size() == 1 && !q.law_in_part &&
+      nibbled_alike(q.first, q.rival, rep.gap_before_rmse_n, rep.noise_n, o)) {
+    q.verdict = Quality::Alike;
+    return q;
+  }
+  switch (fit_quality(q.first, q.runner_up, q.judged_before_n, q.judged_after_n, rep.noise_n,
+                      q.law_in_part, o)) {
+    case FitQuality::OneBite:
+      q.verdict = Quality::OneBite;
+      break;
+    case FitQuality::Nibble:
+      q.verdict = Quality::Nibble;
+      break;
+    default:
+      q.verdict = Quality::Pass;
+  }
+  return q;
+}
+
 }  // namespace
 
 void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Options& o) {
@@ -73,12 +137,16 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   if (named_effects(sel.chosen).size() <= 2 && sel.heldout_n > o.noise_factor * rep.noise_n) {
     // The runs round 1 scored.
     std::vector<Run>& entry = sel.entry_runs ? *sel.entry_runs : sel.runs;
+    // In-sample pairs stand where nothing would be named: a first effect that passed (a truck's
+    // 10.9 ms time offset) is not taken by load transfer beside it fitted to its residual rest,
+    // but one the fit-quality check vetoes leaves the gap as unexplained as no name does (a
+    // time offset taking 17 % of a load transfer's and speed friction's 103 N).
+    const bool vetoed = !named_effects(sel.chosen).empty() && judge_quality(rep, sel, o).vetoed();
+    const bool nothing_named = named_effects(sel.chosen).empty() || vetoed;
     if (auto p =
             search_pairs(entry, rep.baseline_effects, rep.effects, rep.gap_before_rmse_n,
                          sel.heldout_n, rep.before, fit, rep.noise_n,
-                         named_effects(sel.chosen).empty() ? std::optional(in_sample_rms(sel.fit))
-                                                           : std::nullopt,
-                         o)) {
+                         nothing_named ? std::optional(in_sample_rms(sel.fit)) : std::nullopt, o)) {
       const std::string before_names = sel.named();
       for (auto& e : rep.effects)
         if (e.accepted) {
@@ -107,9 +175,11 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
                                      "trades the tyre's shape for the load, {:.1f} N held out",
                                      p->heldout_n)
                        : std::string(),
-          before_names.empty()
-              ? "each alone bends the curve against the other, so neither passed by itself"
-              : "one effect at a time, the first took part of its partner's bend"));
+          before_names.empty() ? "each alone bends the curve against the other, so neither "
+                                 "passed by itself"
+          : vetoed ? "each alone bends the curve against the other, and what passed alone left "
+                     "most of the gap (the fit-quality check would name nothing)"
+                   : "one effect at a time, the first took part of its partner's bend"));
       sel.restore_entry_runs();
       sel.chosen = p->model;
       sel.fit = std::move(p->fit);
@@ -125,73 +195,35 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   }
   // Fit quality: effects that leave most of a structured gap in place are not its cause (a curve
   // that is not a Magic Formula makes every candidate nibble at it): nothing is named then.
+  const Quality q = judge_quality(rep, sel, o);
   const std::vector<Effect> names = named_effects(sel.chosen);
-  // runner_up: the largest other round-1 gain. Neither it nor the rival is a degenerate fit (a
-  // threshold whose tyre carries no force repeats the measured force: a large gain, no law).
-  double first = 0.0, runner_up = 0.0;
-  // rival: the largest round-1 gain of another law than the one named: not its other lag, and
-  // not load transfer, whose one ratio stands for a family of laws and, with the deceleration
-  // following the force, reshapes any curve in part (speed friction at one speed: 31 % beside
-  // load transfer's 31 %).
-  double rival = 0.0;
-  Effect rival_effect = Effect::SlipOffset;
-  for (const auto& e : rep.effects) {
-    if (names.empty()) break;
-    if (e.effect == names.front()) {
-      first = e.gain;
-    } else if (e.round == 0 && !e.degenerate) {
-      runner_up = std::max(runner_up, e.gain);
-      if (!is_nuisance(e.effect) && e.effect != lag_twin(names.front()) &&
-          !is_load_transfer(e.effect) && e.gain > rival) {
-        rival = e.gain;
-        rival_effect = e.effect;
-      }
-    }
-  }
-  // Two or more named: the share they explain together (a pair's members may each bend the
-  // curve against the other alone).
-  if (names.size() > 1)
-    first = std::max(first, 1.0 - sel.heldout_n / std::max(rep.gap_before_rmse_n, 1e-12));
-  // Load transfer's law is one stiffness ratio for a tyre's own load laws of D, Kx and E.
-  const bool law_in_part = !names.empty() && is_load_transfer(names.front());
-  // Whether a structured gap is left is judged on every run at once where load transfer leads:
-  // left out, a run's load and its peak trade (the deceleration follows this wheel's force), so
-  // the fastest run predicted from slower ones is off by more than the effect leaves (gap.md §9).
-  // Its gain, the bite it takes, stays held out.
-  const double judged_before_n = law_in_part ? in_sample_rms(rep.before) : rep.gap_before_rmse_n;
-  const double judged_after_n = law_in_part ? in_sample_rms(sel.fit) : sel.heldout_n;
-  if (names.size() == 1 && !law_in_part &&
-      nibbled_alike(first, rival, rep.gap_before_rmse_n, rep.noise_n, o)) {
+  if (q.verdict == Quality::Alike) {
     veto(fmt::format("{} takes a small share of the held-out gap ({:.0f} %, under the "
                      "fit-quality share {:.0f} %) of a baseline {:.2f}x the noise floor, and {}, "
                      "another law, as much or more ({:.0f} %): two laws biting the same part of "
                      "the curve alike show a curve that is not a Magic Formula there, not either "
                      "effect, so no effect is named",
-                     to_string(names.front()), 100 * first, 100 * o.min_first_gain,
-                     rep.gap_before_rmse_n / rep.noise_n, to_string(rival_effect), 100 * rival),
+                     to_string(names.front()), 100 * q.first, 100 * o.min_first_gain,
+                     rep.gap_before_rmse_n / rep.noise_n, to_string(q.rival_effect), 100 * q.rival),
          "passed, but vetoed by the fit-quality check (see the notes)");
-  } else if (!names.empty()) {
-    const FitQuality q =
-        fit_quality(first, runner_up, judged_before_n, judged_after_n, rep.noise_n, law_in_part, o);
-    if (q == FitQuality::OneBite)
-      rep.notes.push_back(fmt::format(
-          "{} explains only {:.0f} % of the held-out gap, under the fit-quality share ({:.0f} %), "
-          "but {:.1f}x the gain of any other candidate ({:.3f}): one effect stands out, which a "
-          "curve that is not a Magic Formula does not give (its candidates nibble alike); it is "
-          "named, with the gap it leaves",
-          to_string(names.front()), 100 * first, 100 * o.min_first_gain,
-          first / std::max(runner_up, 1e-12), runner_up));
-    if (q == FitQuality::Nibble)
-      veto(
-          fmt::format(
-              "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
-              "left{} against {:.1f} N of noise ({:.0f} % of the structure beyond the noise): the "
-              "residual has a structure no candidate explains (is the curve a Magic Formula?), so "
-              "no effect is named",
-              to_string(names.front()), 100 * first, judged_after_n,
-              law_in_part ? " in-sample" : "", rep.noise_n,
-              100 * structure_left_share(judged_before_n, judged_after_n, rep.noise_n)),
-          "passed, but vetoed by the fit-quality check (see the notes)");
+  } else if (q.verdict == Quality::OneBite) {
+    rep.notes.push_back(fmt::format(
+        "{} explains only {:.0f} % of the held-out gap, under the fit-quality share ({:.0f} %), "
+        "but {:.1f}x the gain of any other candidate ({:.3f}): one effect stands out, which a "
+        "curve that is not a Magic Formula does not give (its candidates nibble alike); it is "
+        "named, with the gap it leaves",
+        to_string(names.front()), 100 * q.first, 100 * o.min_first_gain,
+        q.first / std::max(q.runner_up, 1e-12), q.runner_up));
+  } else if (q.verdict == Quality::Nibble) {
+    veto(fmt::format(
+             "the best candidate ({}) explains only {:.0f} % of the held-out gap and {:.1f} N are "
+             "left{} against {:.1f} N of noise ({:.0f} % of the structure beyond the noise): the "
+             "residual has a structure no candidate explains (is the curve a Magic Formula?), so "
+             "no effect is named",
+             to_string(names.front()), 100 * q.first, q.judged_after_n,
+             q.law_in_part ? " in-sample" : "", rep.noise_n,
+             100 * structure_left_share(q.judged_before_n, q.judged_after_n, rep.noise_n)),
+         "passed, but vetoed by the fit-quality check (see the notes)");
   }
   // Nothing to explain: the baseline's held-out gap is within the noise floor (below
   // min_gap_over_floor x the floor, the floor's own uncertainty allowed for). A candidate may
