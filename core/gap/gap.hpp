@@ -204,8 +204,10 @@ struct ConditionOptions {
   int smooth_half_window = 10;   ///< zero-phase centred moving average of slip and speeds (samples)
   std::size_t max_points = 400;  ///< decimation for fitting
   /// Cut the run at the lock-up runaway: the first slip jump larger than this between two
-  /// samples (0: keep everything).
+  /// samples (0: keep everything) and, on the roller, than runaway_slip_per_s over the sample
+  /// interval.
   double runaway_slip_per_sample = 0.01;
+  double runaway_slip_per_s = 10.0;
   pipeline::ForceSource force = pipeline::ForceSource::Pressure;
 };
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,

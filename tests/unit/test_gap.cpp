@@ -111,6 +111,36 @@ TEST(GapCondition, AGroundRunawayIsKeptWhereTheChannelFallsWithTheTyreAndCutWher
   EXPECT_TRUE(roller.runaway);
 }
 
+TEST(GapCondition, ARunawayIsASlipRateNotAJumpPerSample) {
+  // A roller run at 5 km/h exported at 100 Hz: past 3 % the slip rises at 3 /s (0.03 a sample,
+  // the wheel losing 4 m/s^2 before it locks: a heavy wheel's inertial force, the tyre still
+  // on its curve), then at 30 /s from 10 %. Cut where it runs away, not at the first 0.01 jump.
+  pipeline::Event e;
+  e.bench = can::BenchKind::Roller;
+  for (int i = 0; i < 80; ++i) {
+    const double t = i * 0.01;
+    const double slip =
+        t < 0.6 ? 0.05 * t : (t < 0.6233 ? 0.03 + 3 * (t - 0.6) : 0.1 + 30 * (t - 0.6233));
+    pipeline::Sample smp;
+    smp.t_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
+    smp.v_ref_mps = 1.39;
+    smp.v_wheel_mps = 1.39 * (1 - std::min(slip, 0.95));
+    smp.pressure_bar = 50 * t;
+    e.samples.push_back(smp);
+  }
+  pipeline::Calibration c;
+  c.bench = can::BenchKind::Roller;
+  c.brake_gain_n_per_bar = 60.0;
+  gap::ConditionOptions o;
+  o.max_points = 1000;
+  const gap::Run r = gap::condition("slow runaway", e, c, o);
+  EXPECT_TRUE(r.runaway);
+  EXPECT_GT(r.t_s.back(), 0.615);  // the slow part kept
+  EXPECT_LT(r.t_s.back(), 0.635);  // the fast part cut
+  o.runaway_slip_per_s = 0;        // judged per sample alone: cut at the first 0.01 jump
+  EXPECT_LT(gap::condition("slow runaway", e, c, o).t_s.back(), 0.605);
+}
+
 TEST(Gap, WheelInertiaIsFoundFirst) {
   // Only the wheel's real inertia (1 kg m^2) differs from the 4-parameter model.
   sim::Scenario s = scenario("ideal_roller");
