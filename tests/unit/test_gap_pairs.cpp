@@ -38,6 +38,19 @@ RefereePair referee_pair(gap::Condition c, sim::Generator g, int index,
   return p;
 }
 
+/// Generator B's ground pair `index` from every export, under the referee's gates for them.
+RefereePair every_export_ground_pair(int index) {
+  sim::set_generator_b_stations(sim2::Stations::Every);
+  struct Restore {
+    ~Restore() { sim::set_generator_b_stations(sim2::Stations::Cars); }
+  } restore;
+  gap::Options gates = gap::calibrated_options(gap::Condition::Ground);
+  gates.gate_gain = 0.101;
+  gates.bic_margin_per_point = 0.2379;
+  gates.noise_factor = 2.13;
+  return referee_pair(gap::Condition::Ground, sim::Generator::B, index, gates);
+}
+
 }  // namespace
 
 TEST(GapPairs, DrawsTwoDifferentEffectsAndNeverLagWithDelay) {
@@ -310,15 +323,7 @@ TEST(GapPairs, LoadTransferWithSpeedFrictionIsJudgedOnAllRuns) {
 // truck): the threshold fits at 2.4 bar with a curve peaking at 0 N (gain 0.74), and the
 // relaxation length's 34 % was vetoed as two laws biting alike.
 TEST(GapPairs, ATyreCarryingNoForceIsNoRivalLaw) {
-  sim::set_generator_b_stations(sim2::Stations::Every);
-  struct Restore {
-    ~Restore() { sim::set_generator_b_stations(sim2::Stations::Cars); }
-  } restore;
-  gap::Options gates = gap::calibrated_options(gap::Condition::Ground);
-  gates.gate_gain = 0.101;  // the referee's every-export ground gates
-  gates.bic_margin_per_point = 0.2379;
-  gates.noise_factor = 2.13;
-  const RefereePair p = referee_pair(gap::Condition::Ground, sim::Generator::B, 39, gates);
+  const RefereePair p = every_export_ground_pair(39);
   ASSERT_EQ(p.inj.effect, "relaxation_length") << p.why;
   auto noted = [&](const std::string& what) {
     return std::any_of(p.res.notes.begin(), p.res.notes.end(),
@@ -333,15 +338,7 @@ TEST(GapPairs, ATyreCarryingNoForceIsNoRivalLaw) {
 // nothing is named (left out, a run's load and its peak trade: 114 N held out, 2.6 N in-sample).
 // Generator B's ground pair 43 from every export (three runs of a car at 59-111 km/h).
 TEST(GapPairs, AFirstEffectTheFitQualityCheckVetoesLeavesALoadTransferPairInSample) {
-  sim::set_generator_b_stations(sim2::Stations::Every);
-  struct Restore {
-    ~Restore() { sim::set_generator_b_stations(sim2::Stations::Cars); }
-  } restore;
-  gap::Options gates = gap::calibrated_options(gap::Condition::Ground);
-  gates.gate_gain = 0.101;  // the referee's every-export ground gates
-  gates.bic_margin_per_point = 0.2379;
-  gates.noise_factor = 2.13;
-  const RefereePair p = referee_pair(gap::Condition::Ground, sim::Generator::B, 43, gates);
+  const RefereePair p = every_export_ground_pair(43);
   ASSERT_EQ(p.inj.effect, "load_transfer") << p.why;
   ASSERT_EQ(p.inj.effect2, "speed_friction") << p.why;
   EXPECT_TRUE(p.res.correct()) << p.why;
