@@ -152,7 +152,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   for (const auto& s : e.samples) take(s);
   // On the roller a jump per sample is a slip rate only at one sample rate: at 100 Hz a 0.01
   // jump is a wheel at 5 km/h losing 1.4 m/s^2, still rolling on its curve, and the heavy
-  // wheel's inertial force (I a / R^2) a 500 Hz export keeps up to 7 m/s^2 was cut with it. (On
+  // wheel's inertial force (I a / R^2), kept at 500 Hz up to 7 m/s^2, would be cut with it. (On
   // the ground at 30-130 km/h the same slip rate is a deceleration 5-65 times as large, and the
   // runaway is read through the channel as well: there the jump per sample stays.)
   const double runaway_jump =
