@@ -45,10 +45,10 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
     }
   if (measured > 0) speed_noise_mps /= measured;
   // No run long enough (a 50 Hz export of 0.3 s stops: 12-17 samples each): the floor would be
-  // the force channel's alone (2 N for a car at 31-120 km/h whose speeds carry 2-11 mm/s of
-  // noise, 13 N through the curve's slope), and a fitted model's 14 N called a structure no
-  // effect explains. Each run's slip at rest measures its speed noise; runs with little rest take
-  // the set's, pooled over all steps at rest.
+  // the force channel's alone (2 N for a car at 33 km/h whose 3 mm/s speed noise leaves 10 N
+  // through the curve's slope), and a fitted model's 14 N called a structure no effect
+  // explains. Each run's slip at rest measures its speed noise; runs with little rest take the
+  // set's, pooled over all steps at rest.
   if (measured == 0) {
     double sq = 0;
     std::size_t points = 0;

@@ -325,7 +325,7 @@ struct Floor {
   /// took at their own speed (0: none borrowed).
   int borrowed_runs = 0;
   double borrowed_speed_noise_mps = 0.0;
-  bool pooled_noise = false;  ///< no run long enough: measured on the runs' slip at rest
+  bool pooled_noise = false;  ///< no run long enough: measured on all runs' deviations together
 };
 Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params);
 /// The report's note on the runs that borrowed their slip noise (empty: none did).
