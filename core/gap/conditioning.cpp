@@ -335,13 +335,6 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     raw_slip[i] = 1.0 - v_wheel[i] / full.v_ref_mps[i];
   const std::optional<double> measured_sd = smoothed_noise_sd(raw_slip, half_window);
   full.slip_sd_unmeasured = !measured_sd;
-  // Too short: the slip at rest before the brake, where the signal is flat, measures the speed
-  // channels' noise (white, through the smoother's gain) for the floor to pool across runs.
-  if (!measured_sd && full.rest_slip_steps >= 2 && !full.v_ref_mps.empty()) {
-    double v_mps = 0;
-    for (double v : full.v_ref_mps) v_mps += v / static_cast<double>(full.v_ref_mps.size());
-    full.rest_noise_mps = full.rest_slip_sd_ratio * smoothing_noise_gain(half_window) * v_mps;
-  }
   const double slip_sd = measured_sd.value_or(0.0);
   const auto vr = smooth(full.v_ref_mps, half_window), vw = smooth(v_wheel, half_window);
   Run::NoiseProbe probe{half_window, std::move(raw_slip), {}, {}, slip_sd};

@@ -95,27 +95,15 @@ double fitted_foot_ratio(const std::vector<Effect>& model, const Fit& f) {
 void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double rest_bar) {
   r.rest_slip_sum = r.rest_slip_sq_sum = 0;
   r.rest_slip_points = 0;
-  std::vector<double> steps;  // from one sample at rest to the next
-  double last = NAN;
   for (const pipeline::Sample& s : lead_in) {
     if (s.pressure_bar > rest_bar || !(s.v_ref_mps >= kMinRefSpeedMps) ||
-        !std::isfinite(s.v_wheel_mps)) {
-      last = NAN;
+        !std::isfinite(s.v_wheel_mps))
       continue;
-    }
     const double slip = 1.0 - s.v_wheel_mps / s.v_ref_mps;
     r.rest_slip_sum += slip;
     r.rest_slip_sq_sum += slip * slip;
     ++r.rest_slip_points;
-    if (std::isfinite(last)) steps.push_back(slip - last);
-    last = slip;
   }
-  // The noise per sample, robustly: the wheel that starts to slow behind a lagging pressure
-  // channel in the last samples at rest would dominate a variance.
-  r.rest_slip_steps = steps.size();
-  if (steps.size() < 2) return;
-  for (double& d : steps) d = std::abs(d);
-  r.rest_slip_sd_ratio = upper_median(steps) / 0.6745 / std::sqrt(2.0);
 }
 
 namespace {

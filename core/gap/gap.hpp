@@ -132,11 +132,8 @@ struct Run {
   /// leaves (errors in variables: through the local slope it is force noise the fit cannot remove).
   std::vector<double> slip_sd;
   /// The run was too short for slip_sd to be measured on it: the floor gives it the measured
-  /// runs' speed noise (noise_floor), or, where no run was long enough, the speed noise its
-  /// slip at rest shows after the smoother (rest_noise_mps, over rest_slip_steps; NaN: under
-  /// 2), pooled over the runs.
+  /// runs' speed noise (noise_floor).
   bool slip_sd_unmeasured = false;
-  double rest_noise_mps = NAN;
   /// What the slip's noise was measured on, at full rate (empty: not measured). An encoder's
   /// ripple taken out of the slip later is taken out of it too and the noise measured again:
   /// a ground wheel's once-per-revolution ripple (4-10 Hz) lies between the two smoothers'
@@ -171,10 +168,6 @@ struct Run {
   /// samples). A slip offset reads there as itself (missing_evidence).
   double rest_slip_sum = 0.0, rest_slip_sq_sum = 0.0;
   std::size_t rest_slip_points = 0;
-  /// Its noise per sample (median step between consecutive samples at rest, as a white noise's
-  /// sd; 0: under 2 steps), and how many steps measured it.
-  double rest_slip_sd_ratio = 0.0;
-  std::size_t rest_slip_steps = 0;
   /// The slip offset held where the wheel rested (NaN: free): a fit's slip offset stays within
   /// foot_pin_tol_ratio of foot_pin_ratio (threshold_at_rest).
   double foot_pin_ratio = NAN, foot_pin_tol_ratio = 0.0;
@@ -325,7 +318,6 @@ struct Floor {
   /// took at their own speed (0: none borrowed).
   int borrowed_runs = 0;
   double borrowed_speed_noise_mps = 0.0;
-  bool pooled_noise = false;  ///< no run long enough: measured on all runs' deviations together
 };
 Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params);
 /// The report's note on the runs that borrowed their slip noise (empty: none did).
