@@ -89,7 +89,8 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
                 {"v_wheel_step_mps", num(r.floor.v_wheel_step_mps)},
                 {"force_step_n", num(r.floor.force_step_n)},
                 {"borrowed_runs", r.floor.borrowed_runs},
-                {"borrowed_speed_noise_mps", num(r.floor.borrowed_speed_noise_mps)}};
+                {"borrowed_speed_noise_mps", num(r.floor.borrowed_speed_noise_mps)},
+                {"pooled_noise", r.floor.pooled_noise}};
   j["gap_before_rmse_n"] = num(r.gap_before_rmse_n);
   j["gap_after_rmse_n"] = num(r.gap_after_rmse_n);
   j["fraction_explained"] =

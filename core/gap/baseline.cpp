@@ -15,6 +15,10 @@ namespace brakefit::gap {
 
 namespace {
 
+/// The fewest steps between samples at rest that measure a run's speed noise, or, over all runs,
+/// the set's, where no run is long enough to measure it on its slip.
+constexpr std::size_t kPooledNoisePoints = 10;
+
 double mean_speed_mps(const Run& r) {
   double v = 0;
   for (double x : r.v_ref_mps) v += x / static_cast<double>(r.v_ref_mps.size());
@@ -40,6 +44,24 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
       ++measured;
     }
   if (measured > 0) speed_noise_mps /= measured;
+  // No run long enough (a 50 Hz export of 0.3 s stops: 12-17 samples each): the floor would be
+  // the force channel's alone (2 N for a car at 31-120 km/h whose speeds carry 2-11 mm/s of
+  // noise, 13 N through the curve's slope), and a fitted model's 14 N called a structure no
+  // effect explains. Each run's slip at rest measures its speed noise; runs with little rest take
+  // the set's, pooled over all steps at rest.
+  if (measured == 0) {
+    double sq = 0;
+    std::size_t points = 0;
+    for (const Run& r : runs)
+      if (std::isfinite(r.rest_noise_mps)) {
+        sq += static_cast<double>(r.rest_slip_steps) * r.rest_noise_mps * r.rest_noise_mps;
+        points += r.rest_slip_steps;
+      }
+    if (points >= kPooledNoisePoints) {
+      speed_noise_mps = std::sqrt(sq / static_cast<double>(points));
+      fl.pooled_noise = true;
+    }
+  }
   // RMS over runs of each run's mean square, as the held-out gap weighs its runs.
   double force_sq = 0, slip_sq = 0, sd_sq = 0;
   for (const Run& r : runs) {
@@ -51,8 +73,15 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
     fl.force_step_n = std::max(fl.force_step_n, r.force_step_n);
     double run_slip_sq = 0, run_sd_sq = 0;
     const std::size_t points = std::min(r.slip.size(), r.slip_sd.size());
-    const bool borrows = r.slip_sd_unmeasured && measured > 0 && !r.v_ref_mps.empty();
-    const double borrowed_sd = borrows ? speed_noise_mps / std::max(mean_speed_mps(r), 0.1) : 0.0;
+    const bool borrows =
+        r.slip_sd_unmeasured && (measured > 0 || fl.pooled_noise) && !r.v_ref_mps.empty();
+    // A run's own rest, where it has enough of it (the noise of an export's speeds can grow with
+    // the speed: 3 to 11 mm/s from 31 to 120 km/h in one of generator B's sets).
+    const bool own_rest =
+        measured == 0 && r.rest_slip_steps >= kPooledNoisePoints && std::isfinite(r.rest_noise_mps);
+    const double borrowed_sd =
+        borrows ? (own_rest ? r.rest_noise_mps : speed_noise_mps) / std::max(mean_speed_mps(r), 0.1)
+                : 0.0;
     if (borrows) {
       ++fl.borrowed_runs;
       fl.borrowed_speed_noise_mps = speed_noise_mps;
@@ -79,6 +108,12 @@ Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& param
 
 std::string borrowed_noise_note(const Floor& fl) {
   if (fl.borrowed_runs == 0) return {};
+  if (fl.pooled_noise)
+    return fmt::format(
+        "the runs are each too short to measure their slip noise on (under 4 smoothing windows): "
+        "their slip at rest before the brake measures it ({} runs, {:.2g} m/s of speed over "
+        "them)",
+        fl.borrowed_runs, fl.borrowed_speed_noise_mps);
   return fmt::format(
       "{} run(s) too short to measure their slip noise on (under 4 smoothing windows) took the "
       "other runs' speed noise, {:.2g} m/s, at their own speed",

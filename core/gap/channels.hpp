@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -190,6 +191,27 @@ inline double wave_rms(const Run::Wave& w, std::size_t i) {
 /// Takes a reference ripple v (1 + c cos + s sin of its angle) out of a run, its probe too: it
 /// is placed once, before the encoders' estimates start from the slip as it leaves here.
 void take_out_reference_ripple(Run& r, double c, double s);
+/// The slip's correction for a ripple at the encoders' angles, (1 - s) (eps_wheel - eps_ref):
+/// added to a slip read with the ripple in it.
+double ripple_slip_fix(const SpeedRipple& ripple, double slip, double wheel_angle_rad,
+                       double ref_angle_rad);
+
+/// Where a run's encoders were at rest before the brake (rest_noise.cpp).
+struct RestGeometry {
+  double wheel_radius_m = 0.0, ref_radius_m = 0.0;
+  double frame_shift_s = 0.0;  ///< speeds that are frame means describe this long before stamp
+  double interval_s = 0.0;     ///< the sampler's (0: the stamps')
+  double v_wheel_step_mps = 0.0, v_ref_step_mps = 0.0;  ///< the speeds' quantisation steps
+};
+/// Run::RestProbe from a lead-in's samples up to the run's first (at rest: pressure at most
+/// rest_bar, the reference moving); its gain is left to the caller.
+Run::RestProbe rest_probe(std::span<const pipeline::Sample> rest, double rest_bar,
+                          const RestGeometry& g);
+/// The probe with a ripple taken out of its slip.
+Run::RestProbe rest_probe_without(const Run::RestProbe& p, const SpeedRipple& ripple);
+/// Run::rest_noise_mps and rest_slip_steps from its probe, with the ripple taken out (none: an
+/// empty SpeedRipple).
+void measure_rest_noise(Run& r, const SpeedRipple& ripple);
 
 /// The noise a channel keeps after the smoother (half window), measured on the channel: right
 /// for white, anti-correlated and correlated errors alike.

@@ -334,7 +334,23 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   for (std::size_t i = 0; i < raw_slip.size(); ++i)
     raw_slip[i] = 1.0 - v_wheel[i] / full.v_ref_mps[i];
   const std::optional<double> measured_sd = smoothed_noise_sd(raw_slip, half_window);
+  const double ref_radius_m =
+      c.bench == can::BenchKind::Roller ? c.roller_radius_m : c.fifth_wheel_radius_m;
   full.slip_sd_unmeasured = !measured_sd;
+  // Too short: the slip at rest before the brake measures the speeds' noise (rest_noise.cpp).
+  if (!measured_sd && rest > 1) {
+    const double interval_s = median_interval_s(full.t_s);
+    const RestGeometry g{
+        c.wheel_radius_m, ref_radius_m,     c.speed_timing == "frame_mean" ? 0.5 * interval_s : 0,
+        interval_s,       wheel_noise.step, ref_noise.step};
+    Run::RestProbe p = rest_probe(std::span(e.lead_in).first(rest), rest_bar, g);
+    if (full.ref_ripple_from_speed)
+      p = rest_probe_without(p, {{false, true}, {0, full.ref_ripple_c}, {0, full.ref_ripple_s}});
+    for (double v : full.v_ref_mps) p.gain_mps += v / static_cast<double>(full.v_ref_mps.size());
+    p.gain_mps *= smoothing_noise_gain(half_window);
+    full.rest_probe = std::make_shared<const Run::RestProbe>(std::move(p));
+    measure_rest_noise(full, {});
+  }
   const double slip_sd = measured_sd.value_or(0.0);
   const auto vr = smooth(full.v_ref_mps, half_window), vw = smooth(v_wheel, half_window);
   Run::NoiseProbe probe{half_window, std::move(raw_slip), {}, {}, slip_sd};
@@ -352,8 +368,6 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   // 101048), which load transfer then read as load.
   full.wheel_accel_mps2 = derivative(full.t_s, vw);
   // The encoders' angles (trapezoidal integration of speed / radius).
-  const double ref_radius_m =
-      c.bench == can::BenchKind::Roller ? c.roller_radius_m : c.fifth_wheel_radius_m;
   full.wheel_angle_rad.assign(vw.size(), 0.0);
   full.ref_angle_rad.assign(vr.size(), 0.0);
   for (std::size_t i = 1; i < vw.size(); ++i) {

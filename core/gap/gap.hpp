@@ -132,8 +132,22 @@ struct Run {
   /// leaves (errors in variables: through the local slope it is force noise the fit cannot remove).
   std::vector<double> slip_sd;
   /// The run was too short for slip_sd to be measured on it: the floor gives it the measured
-  /// runs' speed noise (noise_floor).
+  /// runs' speed noise (noise_floor), or, where no run was long enough, the speed noise its
+  /// slip at rest shows after the smoother (rest_noise_mps, over rest_slip_steps; NaN: under
+  /// 2 steps, or an encoder's ripple left in it), pooled over the runs.
   bool slip_sd_unmeasured = false;
+  /// The slip at rest before the brake, for a run whose slip_sd is unmeasured: the lead-in's
+  /// samples at rest (NaN where one was not: no step is taken across it), and the encoders'
+  /// angles there, rolled back from the run's start, so that an encoder's ripple taken out of
+  /// the run is taken out of its rest too (at 50 Hz a fast wheel's ripple reads as noise).
+  struct RestProbe {
+    std::vector<double> slip, wheel_angle_rad, ref_angle_rad;
+    double gain_mps = 0.0;       ///< a sample's slip noise to the speed noise the smoother leaves
+    double step_sd_ratio = 0.0;  ///< a sample's slip error the speeds' quantisation leaves
+  };
+  std::shared_ptr<const RestProbe> rest_probe;
+  double rest_noise_mps = NAN;
+  std::size_t rest_slip_steps = 0;
   /// What the slip's noise was measured on, at full rate (empty: not measured). An encoder's
   /// ripple taken out of the slip later is taken out of it too and the noise measured again:
   /// a ground wheel's once-per-revolution ripple (4-10 Hz) lies between the two smoothers'
@@ -318,6 +332,7 @@ struct Floor {
   /// took at their own speed (0: none borrowed).
   int borrowed_runs = 0;
   double borrowed_speed_noise_mps = 0.0;
+  bool pooled_noise = false;  ///< no run long enough: measured on the runs' slip at rest
 };
 Floor noise_floor(const std::vector<Run>& runs, const std::vector<double>& params);
 /// The report's note on the runs that borrowed their slip noise (empty: none did).

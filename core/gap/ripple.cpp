@@ -217,11 +217,14 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   // What each run holds on entry (restored when this estimate finds nothing).
   struct Kept {
     std::vector<double> slip, slip_sd, wheel_accel_mps2, ref_decel_mps2;
+    double rest_noise_mps = NAN;
+    std::size_t rest_slip_steps = 0;
   };
   std::vector<Kept> on_entry;
   on_entry.reserve(runs.size());
   for (Run& r : runs) {
-    on_entry.push_back({r.slip, r.slip_sd, r.wheel_accel_mps2, r.ref_decel_mps2});
+    on_entry.push_back({r.slip, r.slip_sd, r.wheel_accel_mps2, r.ref_decel_mps2, r.rest_noise_mps,
+                        r.rest_slip_steps});
     if (r.slip_as_conditioned.empty()) {
       r.slip_as_conditioned = r.slip;
       r.slip_sd_as_conditioned = r.slip_sd;
@@ -233,6 +236,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       r.slip = r.slip_as_conditioned;
       for (double& s : r.slip) s -= r.ref_bias_removed - r.ref_bias_as_conditioned;
       r.slip_sd = r.slip_sd_as_conditioned;
+      if (r.rest_probe) measure_rest_noise(r, {});
       // The wheel's acceleration and the reference's deceleration stay as the previous estimate
       // corrected them while the residual is taken: the regression's columns are the slip's
       // ripple, and a model that reads them (wheel inertia, load transfer) must not put their
@@ -255,6 +259,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   // the median of its significant ones (one code wheel, one eccentricity).
   std::vector<RippleFit> fits(runs.size());
   int corrected = 0, uncorrected = 0;
+  std::vector<bool> left_in(runs.size(), false);  // an encoder's ripple stays in the run
   std::array<std::vector<double>, 2> amps;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     if (prep[k].residual.size() < kMinAmplitudeSamples) continue;
@@ -335,6 +340,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       const Run::Wave wave = encoder_wave(r, e);
       for (std::size_t i = 0; i < r.slip_sd.size(); ++i)
         r.slip_sd[i] = std::hypot(r.slip_sd[i], amplitude[e] * wave_rms(wave, i) * (1 - r.slip[i]));
+      left_in[k] = true;
       ++uncorrected;
     }
   }
@@ -342,9 +348,13 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     Run& r = runs[k];
     r.wheel_accel_mps2 = r.wheel_accel_as_conditioned;
     r.ref_decel_mps2 = r.ref_decel_as_conditioned;
-    if (!fits[k].used[0] && !fits[k].used[1]) continue;
-    ++corrected;
-    take_out_ripple(r, fits[k], ProbeAfter::AsMeasured);
+    if (fits[k].used[0] || fits[k].used[1]) {
+      ++corrected;
+      take_out_ripple(r, fits[k], ProbeAfter::AsMeasured);
+    }
+    // A ripple left in the run is in its rest too, where it would read as the speeds' noise
+    // (its slip_sd carries it).
+    if (left_in[k]) r.rest_noise_mps = NAN;
   }
   if (corrected == 0 && uncorrected == 0) {
     // Nothing found this time (an estimate's narrow-band test can fail against a refitted
@@ -356,6 +366,8 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       runs[k].slip_sd = std::move(on_entry[k].slip_sd);
       runs[k].wheel_accel_mps2 = std::move(on_entry[k].wheel_accel_mps2);
       runs[k].ref_decel_mps2 = std::move(on_entry[k].ref_decel_mps2);
+      runs[k].rest_noise_mps = on_entry[k].rest_noise_mps;
+      runs[k].rest_slip_steps = on_entry[k].rest_slip_steps;
     }
     return {};
   }

@@ -12,24 +12,11 @@ namespace brakefit::gap {
 
 namespace {
 
-/// The slip's ripple correction (1 - s) (eps_wheel - eps_ref) at the encoders' angles.
-double ripple_fix(const SpeedRipple& fit, double slip, double wheel_angle_rad,
-                  double ref_angle_rad) {
-  double fix = 0;
-  for (std::size_t e = 0; e < 2; ++e) {
-    if (!fit.used[e]) continue;
-    const double ang = e == 0 ? wheel_angle_rad : ref_angle_rad;
-    const double eps = fit.c[e] * std::cos(ang) + fit.s[e] * std::sin(ang);
-    fix += (e == 0 ? 1.0 : -1.0) * (1 - slip) * eps;
-  }
-  return fix;
-}
-
 /// The probe's raw slip with the ripple taken out of it.
 std::vector<double> raw_slip_without(const Run::NoiseProbe& p, const SpeedRipple& fit) {
   std::vector<double> out = p.raw_slip;
   for (std::size_t i = 0; i < out.size(); ++i)
-    out[i] += ripple_fix(fit, p.raw_slip[i], p.wheel_angle_rad[i], p.ref_angle_rad[i]);
+    out[i] += ripple_slip_fix(fit, p.raw_slip[i], p.wheel_angle_rad[i], p.ref_angle_rad[i]);
   return out;
 }
 
@@ -59,6 +46,18 @@ void remove_ripple(Run& r, const SpeedRipple& fit) {
 }
 
 }  // namespace
+
+double ripple_slip_fix(const SpeedRipple& ripple, double slip, double wheel_angle_rad,
+                       double ref_angle_rad) {
+  double fix = 0;
+  for (std::size_t e = 0; e < 2; ++e) {
+    if (!ripple.used[e]) continue;
+    const double ang = e == 0 ? wheel_angle_rad : ref_angle_rad;
+    const double eps = ripple.c[e] * std::cos(ang) + ripple.s[e] * std::sin(ang);
+    fix += (e == 0 ? 1.0 : -1.0) * (1 - slip) * eps;
+  }
+  return fix;
+}
 
 Run::Wave smoothed_wave(const std::vector<double>& v, const std::vector<double>& v_smooth,
                         const std::vector<double>& angle_rad, int half_window) {
@@ -102,6 +101,15 @@ Run::Wave encoder_wave(const Run& r, std::size_t e) {
 
 void take_out_ripple(Run& r, const SpeedRipple& ripple, ProbeAfter probe_after) {
   remove_ripple(r, ripple);
+  if (r.rest_probe) {
+    if (probe_after == ProbeAfter::WithoutRipple) {
+      r.rest_probe =
+          std::make_shared<const Run::RestProbe>(rest_probe_without(*r.rest_probe, ripple));
+      measure_rest_noise(r, {});
+    } else {
+      measure_rest_noise(r, ripple);
+    }
+  }
   if (!r.slip_noise) return;
   // The slip's noise was measured with the ripple in it: its measured part is replaced by the
   // noise measured without it.

@@ -5,6 +5,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <random>
+#include <sstream>
+#include <string>
 
 #include "core/curve.hpp"
 #include "core/gap/gap.hpp"
@@ -347,4 +350,52 @@ TEST(OthersData, TheModelForceIsFilteredAsTheDeclaredChannelWas) {
   for (double x : t) g.push_back(k * (x + 0.01));
   gap::filter_first_order(t, g, tau_s, k * 0.01);
   EXPECT_NEAR(g.back(), k * (t.back() + 0.01 - tau_s), 1e-3 * k);
+}
+
+TEST(OthersData, RunsEachTooShortMeasureTheirSpeedNoiseAtRest) {
+  // A 50 Hz export of short stops: no run holds 4 smoothing windows, and the floor was the force
+  // channel's alone. The runs' slip at rest before the brake measures the speeds' noise, near
+  // what a whole run measures on its own slip.
+  std::string csv_text;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  std::istringstream in(roller_export(0.0));
+  for (std::string line; std::getline(in, line);) {
+    double t = 0, v_ref = 0, v_wheel = 0, p = 0;
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &t, &v_ref, &v_wheel, &p) == 4)
+      line = fmt::format("{:.6f},{:.6f},{:.6f},{:.3f}", t, v_ref + noise(rng), v_wheel + noise(rng),
+                         p);
+    csv_text += line + "\n";
+  }
+  const auto csv = pipeline::parse_event_csv(csv_text, "e.csv");
+  const auto ev = detect(csv, true);
+  const gap::Run whole = gap::condition("a", ev.at(0), csv.calibration, {});
+  ASSERT_FALSE(whole.slip_sd_unmeasured);
+  double v_mps = 0;
+  for (double v : whole.v_ref_mps) v_mps += v / static_cast<double>(whole.v_ref_mps.size());
+  const double measured_mps = whole.slip_sd.front() * v_mps;
+  auto cut = [&](std::size_t n, std::size_t rest) {
+    pipeline::Event e = ev.at(0);
+    e.samples.resize(n);
+    e.lead_in.resize(std::min(rest, e.lead_in.size()));
+    return gap::condition("short", e, csv.calibration, {});
+  };
+  const std::vector<double> params{12.0, 1.6, 4000.0, 0.3};
+  const std::vector<gap::Run> short_runs{cut(100, 200), cut(120, 200)};
+  ASSERT_TRUE(short_runs[0].slip_sd_unmeasured && short_runs[1].slip_sd_unmeasured);
+  const gap::Floor together = gap::noise_floor(short_runs, params);
+  EXPECT_TRUE(together.pooled_noise);
+  EXPECT_EQ(together.borrowed_runs, 2);
+  EXPECT_GT(together.borrowed_speed_noise_mps, 0.5 * measured_mps);
+  EXPECT_LT(together.borrowed_speed_noise_mps, 2.0 * measured_mps);
+  EXPECT_GT(together.slip_n, 0.0);
+  const std::string note = gap::borrowed_noise_note(together);
+  EXPECT_NE(note.find("slip at rest before the brake measures it (2 runs"), std::string::npos)
+      << note;
+  // Too few samples at rest between them (under 10) measure nothing, and nothing is borrowed.
+  const std::vector<gap::Run> tiny{cut(100, 4), cut(120, 4)};
+  const gap::Floor none = gap::noise_floor(tiny, params);
+  EXPECT_FALSE(none.pooled_noise);
+  EXPECT_EQ(none.borrowed_runs, 0);
+  EXPECT_TRUE(gap::borrowed_noise_note(none).empty());
 }

@@ -104,11 +104,20 @@ TEST(SmoothedRipple, AFiftyHertzNullSetIsNotLeftWithItsEncodersRipple) {
   const auto o = gap::calibrated_options(gap::Condition::Ground);
   const auto rep = gap::diagnose(q, sim::pooled_start(q), o);
   const auto ideal = gap::diagnose(truth, sim::pooled_start(truth), o);
-  std::printf("gap %.2f N on a floor of %.2f N, %s (true encoders: %.2f N on %.2f N)\n",
-              rep.gap_before_rmse_n, rep.noise_n, rep.verdict.front().c_str(),
-              ideal.gap_before_rmse_n, ideal.noise_n);
-  // Measured: 2.99 N on 1.52 N (1.69 N on 1.68 N). What is left is the encoder's amplitude,
-  // read 18 % high on the two runs long enough to read it, placed on the others.
+  std::printf(
+      "gap %.2f N on a floor of %.2f N, %s, speed noise at rest %.2g m/s (step %.2g m/s; true "
+      "encoders: %.2f N on %.2f N)\n",
+      rep.gap_before_rmse_n, rep.noise_n, rep.verdict.front().c_str(),
+      rep.floor.borrowed_speed_noise_mps, set.runs.front().tester.speed_step_mps,
+      ideal.gap_before_rmse_n, ideal.noise_n);
+  // Measured: 2.99 N on 2.20 N (1.69 N on 1.68 N). What is left of the gap is the encoder's
+  // amplitude, read 18 % high on the two runs long enough to read it, placed on the others.
+  // The runs are too short to measure their slip noise on: their rest before the brake measures
+  // it, the ripple taken out there as in the runs. What it reads is the export's quantisation,
+  // dithered by the ripple (the true encoders' rest holds one level and reads none): 0.32 mm/s
+  // for a 1 mm/s step, where the ripple left in would read 11 mm/s (22 N of floor).
   EXPECT_LT(rep.gap_before_rmse_n, 2 * ideal.gap_before_rmse_n);
-  EXPECT_LT(rep.noise_n, 1.2 * ideal.noise_n);
+  EXPECT_LT(rep.noise_n, 1.5 * ideal.noise_n);
+  EXPECT_TRUE(rep.floor.pooled_noise);
+  EXPECT_LT(rep.floor.borrowed_speed_noise_mps, 0.5 * set.runs.front().tester.speed_step_mps);
 }

@@ -1,0 +1,131 @@
+// A run too short to measure its slip noise on (Run::slip_sd_unmeasured) measures it on its slip
+// at rest before the brake, where the signal is flat: the speeds' noise per sample, through the
+// smoother's gain. An encoder's once-per-revolution ripple is not noise: a ripple taken out of
+// the run is taken out of its rest the same way (at 50 Hz a wheel at 130 km/h turns 20 times a
+// second and its ripple reads as a noise ten times the speeds').
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "core/gap/internal.hpp"
+
+namespace brakefit::gap {
+
+namespace {
+/// A rest fitted for what is left of a ripple keeps at least this many samples beyond its
+/// columns.
+constexpr Eigen::Index kRestFitSpareSamples = 6;
+}  // namespace
+
+Run::RestProbe rest_probe(std::span<const pipeline::Sample> rest, double rest_bar,
+                          const RestGeometry& g) {
+  Run::RestProbe p;
+  const std::size_t n = rest.size();
+  p.slip.assign(n, NAN);
+  p.wheel_angle_rad.assign(n, 0.0);
+  p.ref_angle_rad.assign(n, 0.0);
+  double v_rest_mps = 0;
+  int at_rest = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const pipeline::Sample& s = rest[i];
+    if (s.pressure_bar <= rest_bar && s.v_ref_mps >= kMinRefSpeedMps &&
+        std::isfinite(s.v_wheel_mps)) {
+      p.slip[i] = 1.0 - s.v_wheel_mps / s.v_ref_mps;
+      v_rest_mps += s.v_ref_mps;
+      ++at_rest;
+    }
+  }
+  if (at_rest > 0)
+    p.step_sd_ratio =
+        std::hypot(g.v_wheel_step_mps, g.v_ref_step_mps) / std::sqrt(12.0) / (v_rest_mps / at_rest);
+  // Rolled back from the last sample at rest (the run's first, where its angles start at 0) on
+  // the sampler's clock, as the run's angles are: at 50 Hz a stamp's 1-5 ms of jitter is 0.1-0.6
+  // rad of a wheel at 130 km/h. A speed that is not a number takes its neighbour's.
+  auto speed = [](double v, double other) { return std::isfinite(v) ? v : other; };
+  for (std::size_t i = n; i-- > 1;) {
+    const double stamps_s = static_cast<double>(rest[i].t_ns - rest[i - 1].t_ns) * 1e-9;
+    const double dt_s = g.interval_s > 0
+                            ? std::max(1.0, std::round(stamps_s / g.interval_s)) * g.interval_s
+                            : stamps_s;
+    const double vw = speed(rest[i].v_wheel_mps, rest[i - 1].v_wheel_mps) +
+                      speed(rest[i - 1].v_wheel_mps, rest[i].v_wheel_mps);
+    const double vr = speed(rest[i].v_ref_mps, rest[i - 1].v_ref_mps) +
+                      speed(rest[i - 1].v_ref_mps, rest[i].v_ref_mps);
+    p.wheel_angle_rad[i - 1] =
+        p.wheel_angle_rad[i] - 0.5 * (std::isfinite(vw) ? vw : 0) * dt_s / g.wheel_radius_m;
+    p.ref_angle_rad[i - 1] =
+        p.ref_angle_rad[i] - 0.5 * (std::isfinite(vr) ? vr : 0) * dt_s / g.ref_radius_m;
+  }
+  // A frame mean describes the moment half a frame before its stamp (the run's speeds were moved
+  // forward by as much before their angles were rolled).
+  if (g.frame_shift_s > 0)
+    for (std::size_t i = 0; i < n; ++i) {
+      if (std::isfinite(rest[i].v_wheel_mps))
+        p.wheel_angle_rad[i] -= g.frame_shift_s * rest[i].v_wheel_mps / g.wheel_radius_m;
+      if (std::isfinite(rest[i].v_ref_mps))
+        p.ref_angle_rad[i] -= g.frame_shift_s * rest[i].v_ref_mps / g.ref_radius_m;
+    }
+  return p;
+}
+
+Run::RestProbe rest_probe_without(const Run::RestProbe& p, const SpeedRipple& ripple) {
+  Run::RestProbe out = p;
+  for (std::size_t i = 0; i < out.slip.size(); ++i)
+    if (std::isfinite(p.slip[i]))
+      out.slip[i] += ripple_slip_fix(ripple, p.slip[i], p.wheel_angle_rad[i], p.ref_angle_rad[i]);
+  return out;
+}
+
+void measure_rest_noise(Run& r, const SpeedRipple& ripple) {
+  r.rest_noise_mps = NAN;
+  r.rest_slip_steps = 0;
+  if (!r.rest_probe) return;
+  Run::RestProbe p = rest_probe_without(*r.rest_probe, ripple);
+  std::vector<std::size_t> at;  // the samples at rest
+  for (std::size_t i = 0; i < p.slip.size(); ++i)
+    if (std::isfinite(p.slip[i])) at.push_back(i);
+  // What the run's estimate left of its ripple is fitted on the rest itself (a level and each
+  // used encoder's cos and sin): the run's phase, read through the smoother on a wheel near the
+  // sampler's Nyquist rate, can miss the rest's by a radian, and a 3e-4 ripple left at a third of
+  // its size is still twice the speeds' noise.
+  const auto used = static_cast<Eigen::Index>(2 * (ripple.used[0] + ripple.used[1]));
+  const Eigen::Index cols = used > 0 ? 1 + used : 0;
+  double dof_scale = 1.0;
+  if (cols > 0 && static_cast<Eigen::Index>(at.size()) >= cols + kRestFitSpareSamples) {
+    const auto rows = static_cast<Eigen::Index>(at.size());
+    Eigen::MatrixXd a(rows, cols);
+    Eigen::VectorXd b(rows);
+    for (Eigen::Index j = 0; j < rows; ++j) {
+      const std::size_t i = at[static_cast<std::size_t>(j)];
+      Eigen::Index col = 0;
+      a(j, col++) = 1.0;
+      for (std::size_t e = 0; e < 2; ++e) {
+        if (!ripple.used[e]) continue;
+        const double ang = e == 0 ? p.wheel_angle_rad[i] : p.ref_angle_rad[i];
+        a(j, col++) = (1 - p.slip[i]) * std::cos(ang);
+        a(j, col++) = (1 - p.slip[i]) * std::sin(ang);
+      }
+      b(j) = p.slip[i];
+    }
+    const Eigen::VectorXd resid = b - a * a.colPivHouseholderQr().solve(b);
+    for (Eigen::Index j = 0; j < rows; ++j) p.slip[at[static_cast<std::size_t>(j)]] = resid(j);
+    dof_scale = std::sqrt(static_cast<double>(rows) / static_cast<double>(rows - cols));
+  }
+  std::vector<double> steps;  // from one sample at rest to the next
+  for (std::size_t i = 1; i < p.slip.size(); ++i)
+    if (std::isfinite(p.slip[i]) && std::isfinite(p.slip[i - 1]))
+      steps.push_back(std::abs(p.slip[i] - p.slip[i - 1]));
+  r.rest_slip_steps = steps.size();
+  if (steps.size() < 2) return;
+  // Robustly (the median step as a white noise's): the wheel that starts to slow behind a
+  // lagging pressure channel in the last samples at rest would dominate a variance.
+  // A quantised channel dithered by the ripple or the noise reads as a staircase's error, which
+  // the run counts where it rebuilds its staircase (slip_sd): it is the noise beyond it.
+  const double sd_ratio = upper_median(steps) / 0.6745 / std::sqrt(2.0) * dof_scale;
+  r.rest_noise_mps =
+      std::sqrt(std::max(sd_ratio * sd_ratio - p.step_sd_ratio * p.step_sd_ratio, 0.0)) *
+      p.gain_mps;
+}
+
+}  // namespace brakefit::gap
