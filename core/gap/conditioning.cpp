@@ -150,17 +150,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     take(e.lead_in[i]);
   measure_rest_slip(full, std::span(e.lead_in).first(rest), rest_bar);
   for (const auto& s : e.samples) take(s);
-  // On the roller a jump per sample is a slip rate only at one sample rate: at 100 Hz a 0.01
-  // jump is a wheel at 5 km/h losing 1.4 m/s^2, still rolling on its curve, and the heavy
-  // wheel's inertial force (I a / R^2), kept at 500 Hz up to 7 m/s^2, would be cut with it. (On
-  // the ground at 30-130 km/h the same slip rate is a deceleration 5-65 times as large, and the
-  // runaway is read through the channel as well: there the jump per sample stays.)
-  const double runaway_jump =
-      o.runaway_slip_per_sample > 0 && c.bench == can::BenchKind::Roller
-          ? std::max(o.runaway_slip_per_sample, o.runaway_slip_per_s * median_interval_s(full.t_s))
-          : o.runaway_slip_per_sample;
-  if (const std::size_t keep = runaway_cut(full, v_wheel, c.bench, runaway_jump);
-      keep < full.t_s.size()) {
+  if (const std::size_t keep = runaway_cut(full, v_wheel, c.bench, o); keep < full.t_s.size()) {
     full.t_s.resize(keep);
     full.v_ref_mps.resize(keep);
     v_wheel.resize(keep);

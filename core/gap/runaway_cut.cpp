@@ -20,7 +20,16 @@ constexpr std::size_t kRunawayHoldSamples = 2;
 constexpr double kRunawayTyreRiseRatio = 1.02, kRunawayTyreFallRatio = 0.95;
 
 std::size_t runaway_cut(Run& full, const std::vector<double>& v_wheel, can::BenchKind bench,
-                        double runaway_slip_per_sample) {
+                        const ConditionOptions& o) {
+  // On the roller a jump per sample is a slip rate only at one sample rate: at 100 Hz a 0.01
+  // jump is a wheel at 5 km/h losing 1.4 m/s^2, still rolling on its curve, and the heavy
+  // wheel's inertial force (I a / R^2), kept at 500 Hz up to 7 m/s^2, would be cut with it. (On
+  // the ground at 30-130 km/h the same slip rate is a deceleration 5-65 times as large, and the
+  // runaway is read through the channel as well: there the jump per sample stays.)
+  const double runaway_slip_per_sample =
+      o.runaway_slip_per_sample > 0 && bench == can::BenchKind::Roller
+          ? std::max(o.runaway_slip_per_sample, o.runaway_slip_per_s * median_interval_s(full.t_s))
+          : o.runaway_slip_per_sample;
   // The lock-up runaway: past the peak a wheel can lose speed within one or two frames. There the
   // slip is measured across a single frame and the force is dominated by the wheel's deceleration
   // (I a / R^2, a numerical derivative of a step): not quasi-static data. The run is cut where
