@@ -96,9 +96,7 @@ void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double
   r.rest_slip_sum = r.rest_slip_sq_sum = 0;
   r.rest_slip_points = 0;
   for (const pipeline::Sample& s : lead_in) {
-    if (s.pressure_bar > rest_bar || !(s.v_ref_mps >= kMinRefSpeedMps) ||
-        !std::isfinite(s.v_wheel_mps))
-      continue;
+    if (!at_rest(s, rest_bar)) continue;
     const double slip = 1.0 - s.v_wheel_mps / s.v_ref_mps;
     r.rest_slip_sum += slip;
     r.rest_slip_sq_sum += slip * slip;

@@ -1,6 +1,7 @@
 #pragma once
 // The evidence only one effect leaves (evidence.cpp, cradle_cap.cpp), checked before a candidate
 // past the gates is named, and the wheel's slip at rest it is read against (conditioning).
+#include <cmath>
 #include <optional>
 #include <span>
 #include <string>
@@ -41,8 +42,13 @@ struct MissingEvidence {
 };
 /// Below this reference speed a sample is not taken (the slip's ratio would blow up).
 inline constexpr double kMinRefSpeedMps = 0.3;
-/// Run::rest_slip_*: the slip of the lead-in's samples at rest (pressure at most rest_bar, the
-/// reference moving), before the rise the run starts at.
+/// A lead-in's sample at rest: pressure at most rest_bar, the reference moving, both speeds read.
+inline bool at_rest(const pipeline::Sample& s, double rest_bar) {
+  return s.pressure_bar <= rest_bar && s.v_ref_mps >= kMinRefSpeedMps &&
+         std::isfinite(s.v_wheel_mps);
+}
+/// Run::rest_slip_*: the slip of the lead-in's samples at rest (at_rest), before the rise the
+/// run starts at.
 void measure_rest_slip(Run& r, std::span<const pipeline::Sample> lead_in, double rest_bar);
 /// The runs' slip at rest pooled: its mean, and its uncertainty: three standard errors and the
 /// largest bias a quantised channel leaves (a speed held on one level is off by up to half a

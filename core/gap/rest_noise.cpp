@@ -26,36 +26,35 @@ Run::RestProbe rest_probe(std::span<const pipeline::Sample> rest, double rest_ba
   p.wheel_angle_rad.assign(n, 0.0);
   p.ref_angle_rad.assign(n, 0.0);
   double v_rest_mps = 0;
-  int at_rest = 0;
+  int points = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const pipeline::Sample& s = rest[i];
-    if (s.pressure_bar <= rest_bar && s.v_ref_mps >= kMinRefSpeedMps &&
-        std::isfinite(s.v_wheel_mps)) {
+    if (at_rest(s, rest_bar)) {
       p.slip[i] = 1.0 - s.v_wheel_mps / s.v_ref_mps;
       v_rest_mps += s.v_ref_mps;
-      ++at_rest;
+      ++points;
     }
   }
-  if (at_rest > 0)
+  if (points > 0)
     p.step_sd_ratio =
-        std::hypot(g.v_wheel_step_mps, g.v_ref_step_mps) / std::sqrt(12.0) / (v_rest_mps / at_rest);
+        std::hypot(g.v_wheel_step_mps, g.v_ref_step_mps) / std::sqrt(12.0) / (v_rest_mps / points);
   // Rolled back from the last sample at rest (the run's first, where its angles start at 0) on
   // the sampler's clock, as the run's angles are: at 50 Hz a stamp's 1-5 ms of jitter is 0.1-0.6
   // rad of a wheel at 130 km/h. A speed that is not a number takes its neighbour's.
-  auto speed = [](double v, double other) { return std::isfinite(v) ? v : other; };
+  auto mean = [](double a, double b) {
+    if (!std::isfinite(a)) return std::isfinite(b) ? b : 0.0;
+    return std::isfinite(b) ? 0.5 * (a + b) : a;
+  };
   for (std::size_t i = n; i-- > 1;) {
     const double stamps_s = static_cast<double>(rest[i].t_ns - rest[i - 1].t_ns) * 1e-9;
     const double dt_s = g.interval_s > 0
                             ? std::max(1.0, std::round(stamps_s / g.interval_s)) * g.interval_s
                             : stamps_s;
-    const double vw = speed(rest[i].v_wheel_mps, rest[i - 1].v_wheel_mps) +
-                      speed(rest[i - 1].v_wheel_mps, rest[i].v_wheel_mps);
-    const double vr = speed(rest[i].v_ref_mps, rest[i - 1].v_ref_mps) +
-                      speed(rest[i - 1].v_ref_mps, rest[i].v_ref_mps);
     p.wheel_angle_rad[i - 1] =
-        p.wheel_angle_rad[i] - 0.5 * (std::isfinite(vw) ? vw : 0) * dt_s / g.wheel_radius_m;
+        p.wheel_angle_rad[i] -
+        mean(rest[i].v_wheel_mps, rest[i - 1].v_wheel_mps) * dt_s / g.wheel_radius_m;
     p.ref_angle_rad[i - 1] =
-        p.ref_angle_rad[i] - 0.5 * (std::isfinite(vr) ? vr : 0) * dt_s / g.ref_radius_m;
+        p.ref_angle_rad[i] - mean(rest[i].v_ref_mps, rest[i - 1].v_ref_mps) * dt_s / g.ref_radius_m;
   }
   // A frame mean describes the moment half a frame before its stamp (the run's speeds were moved
   // forward by as much before their angles were rolled).
