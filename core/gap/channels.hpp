@@ -212,6 +212,18 @@ Run::RestProbe rest_probe_without(const Run::RestProbe& p, const SpeedRipple& ri
 /// Run::rest_noise_mps and rest_slip_steps from its probe, with the ripple taken out (none: an
 /// empty SpeedRipple).
 void measure_rest_noise(Run& r, const SpeedRipple& ripple);
+/// What the runs' rests say of an encoder's ripple of a relative amplitude read on their
+/// residual: each rest fits its own (a level and the encoder's cos and sin); one that could see
+/// that amplitude (3 of its standard errors) refutes it when its own lies 3 of them below.
+/// Only runs too short to measure their slip noise on keep their rest (Run::rest_probe).
+struct RestRippleCheck {
+  int judged = 0, refuted = 0;
+  double largest_rest_amplitude = 0.0;  ///< over the rests that judged
+  double rest_amplitude = 0.0;          ///< their median
+  [[nodiscard]] bool refutes() const { return judged > 0 && 2 * refuted > judged; }
+};
+RestRippleCheck rest_ripple_check(const std::vector<Run>& runs, std::size_t encoder,
+                                  double amplitude);
 
 /// The noise a channel keeps after the smoother (half window), measured on the channel: right
 /// for white, anti-correlated and correlated errors alike.

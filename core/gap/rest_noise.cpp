@@ -127,4 +127,46 @@ void measure_rest_noise(Run& r, const SpeedRipple& ripple) {
       p.gain_mps;
 }
 
+RestRippleCheck rest_ripple_check(const std::vector<Run>& runs, std::size_t encoder,
+                                  double amplitude) {
+  constexpr Eigen::Index kCols = 3;  // a level, the encoder's cos and sin
+  constexpr double kSigmas = 3.0;
+  RestRippleCheck out;
+  std::vector<double> owns;  // each judging rest's own amplitude
+  for (const Run& r : runs) {
+    if (!r.rest_probe) continue;
+    const Run::RestProbe& p = *r.rest_probe;
+    const std::vector<double>& angle = encoder == 0 ? p.wheel_angle_rad : p.ref_angle_rad;
+    std::vector<std::size_t> at;
+    for (std::size_t i = 0; i < p.slip.size(); ++i)
+      if (std::isfinite(p.slip[i])) at.push_back(i);
+    const auto rows = static_cast<Eigen::Index>(at.size());
+    if (rows < kCols + kRestFitSpareSamples) continue;
+    Eigen::MatrixXd a(rows, kCols);
+    Eigen::VectorXd b(rows);
+    for (Eigen::Index j = 0; j < rows; ++j) {
+      const std::size_t i = at[static_cast<std::size_t>(j)];
+      a(j, 0) = 1.0;
+      a(j, 1) = (1 - p.slip[i]) * std::cos(angle[i]);
+      a(j, 2) = (1 - p.slip[i]) * std::sin(angle[i]);
+      b(j) = p.slip[i];
+    }
+    const Eigen::MatrixXd ata = a.transpose() * a;
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(ata);
+    if (!lu.isInvertible()) continue;  // a rest under a fraction of a revolution
+    const Eigen::VectorXd x = lu.solve(a.transpose() * b);
+    const double var = (b - a * x).squaredNorm() / static_cast<double>(rows - kCols);
+    const Eigen::MatrixXd cov = var * lu.inverse();
+    const double se = std::sqrt(0.5 * (cov(1, 1) + cov(2, 2)));
+    if (!(kSigmas * se < amplitude)) continue;  // this rest could not see it
+    const double own = std::hypot(x(1), x(2));
+    owns.push_back(own);
+    out.largest_rest_amplitude = std::max(out.largest_rest_amplitude, own);
+    if (amplitude - own > kSigmas * se) ++out.refuted;
+  }
+  out.judged = static_cast<int>(owns.size());
+  if (!owns.empty()) out.rest_amplitude = upper_median(owns);
+  return out;
+}
+
 }  // namespace brakefit::gap
