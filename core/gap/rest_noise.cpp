@@ -2,7 +2,8 @@
 // at rest before the brake, where the signal is flat: the speeds' noise per sample, through the
 // smoother's gain. An encoder's once-per-revolution ripple is not noise: a ripple taken out of
 // the run is taken out of its rest the same way (at 50 Hz a wheel at 130 km/h turns 20 times a
-// second and its ripple reads as a noise ten times the speeds').
+// second and its ripple reads as a noise ten times the speeds'). The same rests check a ripple's
+// amplitude read on the runs' residual, which on short runs can hold an effect's bend.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
