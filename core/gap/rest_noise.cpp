@@ -6,6 +6,7 @@
 // amplitude read on the runs' residual, which on short runs can hold an effect's bend.
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 
@@ -17,6 +18,35 @@ namespace {
 /// A rest fitted for what is left of a ripple keeps at least this many samples beyond its
 /// columns.
 constexpr Eigen::Index kRestFitSpareSamples = 6;
+
+/// A probe's samples at rest, and the columns a ripple is fitted with there: a level and each
+/// chosen encoder's (1 - s) cos and sin of its angle.
+struct RestFit {
+  std::vector<std::size_t> at;
+  Eigen::MatrixXd a;
+  Eigen::VectorXd b;  ///< the slip
+};
+RestFit rest_fit(const Run::RestProbe& p, std::array<bool, 2> encoders) {
+  RestFit f;
+  for (std::size_t i = 0; i < p.slip.size(); ++i)
+    if (std::isfinite(p.slip[i])) f.at.push_back(i);
+  const auto rows = static_cast<Eigen::Index>(f.at.size());
+  f.a.resize(rows, 1 + 2 * (encoders[0] + encoders[1]));
+  f.b.resize(rows);
+  for (Eigen::Index j = 0; j < rows; ++j) {
+    const std::size_t i = f.at[static_cast<std::size_t>(j)];
+    Eigen::Index col = 0;
+    f.a(j, col++) = 1.0;
+    for (std::size_t e = 0; e < 2; ++e) {
+      if (!encoders[e]) continue;
+      const double ang = e == 0 ? p.wheel_angle_rad[i] : p.ref_angle_rad[i];
+      f.a(j, col++) = (1 - p.slip[i]) * std::cos(ang);
+      f.a(j, col++) = (1 - p.slip[i]) * std::sin(ang);
+    }
+    f.b(j) = p.slip[i];
+  }
+  return f;
+}
 }  // namespace
 
 Run::RestProbe rest_probe(std::span<const pipeline::Sample> rest, double rest_bar,
@@ -82,35 +112,19 @@ void measure_rest_noise(Run& r, const SpeedRipple& ripple) {
   r.rest_slip_steps = 0;
   if (!r.rest_probe) return;
   Run::RestProbe p = rest_probe_without(*r.rest_probe, ripple);
-  std::vector<std::size_t> at;  // the samples at rest
-  for (std::size_t i = 0; i < p.slip.size(); ++i)
-    if (std::isfinite(p.slip[i])) at.push_back(i);
   // What the run's estimate left of its ripple is fitted on the rest itself (a level and each
   // used encoder's cos and sin): the run's phase, read through the smoother on a wheel near the
   // sampler's Nyquist rate, can miss the rest's by a radian, and a 3e-4 ripple left at a third of
   // its size is still twice the speeds' noise.
-  const auto used = static_cast<Eigen::Index>(2 * (ripple.used[0] + ripple.used[1]));
-  const Eigen::Index cols = used > 0 ? 1 + used : 0;
   double dof_scale = 1.0;
-  if (cols > 0 && static_cast<Eigen::Index>(at.size()) >= cols + kRestFitSpareSamples) {
-    const auto rows = static_cast<Eigen::Index>(at.size());
-    Eigen::MatrixXd a(rows, cols);
-    Eigen::VectorXd b(rows);
-    for (Eigen::Index j = 0; j < rows; ++j) {
-      const std::size_t i = at[static_cast<std::size_t>(j)];
-      Eigen::Index col = 0;
-      a(j, col++) = 1.0;
-      for (std::size_t e = 0; e < 2; ++e) {
-        if (!ripple.used[e]) continue;
-        const double ang = e == 0 ? p.wheel_angle_rad[i] : p.ref_angle_rad[i];
-        a(j, col++) = (1 - p.slip[i]) * std::cos(ang);
-        a(j, col++) = (1 - p.slip[i]) * std::sin(ang);
-      }
-      b(j) = p.slip[i];
+  if (ripple.used[0] || ripple.used[1]) {
+    const RestFit f = rest_fit(p, ripple.used);
+    const Eigen::Index rows = f.a.rows(), cols = f.a.cols();
+    if (rows >= cols + kRestFitSpareSamples) {
+      const Eigen::VectorXd resid = f.b - f.a * f.a.colPivHouseholderQr().solve(f.b);
+      for (Eigen::Index j = 0; j < rows; ++j) p.slip[f.at[static_cast<std::size_t>(j)]] = resid(j);
+      dof_scale = std::sqrt(static_cast<double>(rows) / static_cast<double>(rows - cols));
     }
-    const Eigen::VectorXd resid = b - a * a.colPivHouseholderQr().solve(b);
-    for (Eigen::Index j = 0; j < rows; ++j) p.slip[at[static_cast<std::size_t>(j)]] = resid(j);
-    dof_scale = std::sqrt(static_cast<double>(rows) / static_cast<double>(rows - cols));
   }
   std::vector<double> steps;  // from one sample at rest to the next
   for (std::size_t i = 1; i < p.slip.size(); ++i)
@@ -130,33 +144,19 @@ void measure_rest_noise(Run& r, const SpeedRipple& ripple) {
 
 RestRippleCheck rest_ripple_check(const std::vector<Run>& runs, std::size_t encoder,
                                   double amplitude) {
-  constexpr Eigen::Index kCols = 3;  // a level, the encoder's cos and sin
   constexpr double kSigmas = 3.0;
   RestRippleCheck out;
   std::vector<double> owns;  // each judging rest's own amplitude
   for (const Run& r : runs) {
     if (!r.rest_probe) continue;
-    const Run::RestProbe& p = *r.rest_probe;
-    const std::vector<double>& angle = encoder == 0 ? p.wheel_angle_rad : p.ref_angle_rad;
-    std::vector<std::size_t> at;
-    for (std::size_t i = 0; i < p.slip.size(); ++i)
-      if (std::isfinite(p.slip[i])) at.push_back(i);
-    const auto rows = static_cast<Eigen::Index>(at.size());
-    if (rows < kCols + kRestFitSpareSamples) continue;
-    Eigen::MatrixXd a(rows, kCols);
-    Eigen::VectorXd b(rows);
-    for (Eigen::Index j = 0; j < rows; ++j) {
-      const std::size_t i = at[static_cast<std::size_t>(j)];
-      a(j, 0) = 1.0;
-      a(j, 1) = (1 - p.slip[i]) * std::cos(angle[i]);
-      a(j, 2) = (1 - p.slip[i]) * std::sin(angle[i]);
-      b(j) = p.slip[i];
-    }
+    const RestFit f = rest_fit(*r.rest_probe, {encoder == 0, encoder == 1});
+    const Eigen::MatrixXd& a = f.a;
+    if (a.rows() < a.cols() + kRestFitSpareSamples) continue;
     const Eigen::MatrixXd ata = a.transpose() * a;
     const Eigen::FullPivLU<Eigen::MatrixXd> lu(ata);
     if (!lu.isInvertible()) continue;  // a rest under a fraction of a revolution
-    const Eigen::VectorXd x = lu.solve(a.transpose() * b);
-    const double var = (b - a * x).squaredNorm() / static_cast<double>(rows - kCols);
+    const Eigen::VectorXd x = lu.solve(a.transpose() * f.b);
+    const double var = (f.b - a * x).squaredNorm() / static_cast<double>(a.rows() - a.cols());
     const Eigen::MatrixXd cov = var * lu.inverse();
     const double se = std::sqrt(0.5 * (cov(1, 1) + cov(2, 2)));
     if (!(kSigmas * se < amplitude)) continue;  // this rest could not see it

@@ -156,12 +156,10 @@ TEST(SmoothedRipple, AnEffectsBendOnShortRunsIsNotTakenForARipple) {
               real.largest_rest_amplitude);
   EXPECT_GT(real.judged, 0);
   EXPECT_FALSE(real.refutes());
-  auto o = gap::calibrated_options(gap::Condition::Ground);
-  const auto rep = gap::diagnose(q, sim::pooled_start(q), o);
-
-  std::printf("said %s; gap %.1f N on a floor of %.1f N\n",
-              fmt::format("{}", fmt::join(rep.verdict, ", ")).c_str(), rep.gap_before_rmse_n,
-              rep.noise_n);
+  const auto rep =
+      gap::diagnose(q, sim::pooled_start(q), gap::calibrated_options(gap::Condition::Ground));
+  fmt::print("said {}; gap {:.1f} N on a floor of {:.1f} N\n", fmt::join(rep.verdict, ", "),
+             rep.gap_before_rmse_n, rep.noise_n);
   EXPECT_LT(rep.noise_n, rep.gap_before_rmse_n);
   ASSERT_FALSE(rep.verdict.empty());
   EXPECT_NE(std::find(rep.verdict.begin(), rep.verdict.end(), "brake_threshold"),
