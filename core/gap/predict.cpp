@@ -175,7 +175,7 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   // The force-side effects first; the slip-side ones (relaxation, slip offset, time offset) are
   // then applied in that order whatever the order of `effects` (they commute but for the initial
   // state of the relaxation, which needs the force side).
-  double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0, cap_n = INFINITY;
+  double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0, cap_n = INFINITY, lambda_mu_v = 0;
   bool relaxation = false, threshold = false;
   // A load following the deceleration a: D by 1 + q a, B C D by (1 + q a)^ratio, E by e q a.
   auto follow_load = [&](const std::vector<double>& decel, double q, double ratio, double e_slope) {
@@ -230,12 +230,8 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
                     effect == Effect::LoadTransferMeasured ? kPublishedKxLoadRatio : p[first + 1],
                     effect == Effect::LoadTransferShape ? p[first + 2] : 0.0);
         break;
-      case Effect::SpeedFriction:  // lambda_mu* = 1 / (1 + LMUV Vs / V0), Vs = slip * V
-        for (std::size_t i = 0; i < n; ++i) {
-          const double mu = 1.0 / (1.0 + q * std::abs(r.slip[i]) * r.v_ref_mps[i] / kLongVl);
-          d_scale[i] *= mu;
-          b_scale[i] /= mu;
-        }
+      case Effect::SpeedFriction:  // applied below, at the slip the curve is read at
+        lambda_mu_v = q;
         break;
       case Effect::CradleCap:  // the cradle caps the tyre's force (before the wheel's terms)
         cap_n = q;
@@ -281,6 +277,20 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
     // The channel is late as a whole: the wheel's inertial force in it shows dt late too. (A
     // load's timing is its own law's, the body's pitch lag, which would trade with dt here.)
     add = read_earlier(r.t_s, add, dt_s);
+  }
+  // Speed friction, lambda_mu* = 1 / (1 + LMUV Vs / V0): the friction falls with the contact's
+  // sliding speed, Vs = slip x V at the slip the curve is read at (a relaxing tyre's transient
+  // slip, less an offset the encoder added; a late channel's at its own moment), not the
+  // encoders' slip, which leads a relaxing contact's by sigma / V: read on it the friction falls
+  // too early.
+  if (lambda_mu_v != 0) {
+    const std::vector<double> v_mps =
+        dt_s != 0 ? read_earlier(r.t_s, r.v_ref_mps, dt_s) : r.v_ref_mps;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double mu = 1.0 / (1.0 + lambda_mu_v * std::abs(slip[i]) * v_mps[i] / kLongVl);
+      d_scale[i] *= mu;
+      b_scale[i] /= mu;
+    }
   }
   // The Magic Formula, F = D sin(C atan(phi)), phi = u - E (u - atan u), u = B x, a stage at a
   // time over the run so that the arctangents and the sine run as vectors (core/vecmath.hpp).
