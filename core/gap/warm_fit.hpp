@@ -7,8 +7,10 @@
 // restart from their catalogue starts and can stop in a worse minimum than the model without the
 // new effect (load transfer after relaxation and inertia on a ground set: in-sample BIC +385). A
 // fit of some of the runs that ends well above the same model's fit of more runs restarts from
-// that fit: two of three runs alone can lead every start to a minimum the three runs avoid.
+// that fit: two of three runs alone can lead every start to a minimum the three runs avoid. Speed
+// friction fitted to its range's end is refitted from inside the range.
 #include <map>
+#include <optional>
 #include <tuple>
 #include <vector>
 
@@ -33,6 +35,11 @@ class WarmFitter {
   /// runs rebuilt elsewhere are the same runs, other runs at a reused address are not.
   using RunsKey = std::vector<std::tuple<std::size_t, double, double, double>>;
   static RunsKey key_of(const std::vector<const Run*>& runs);
+  /// Where speed friction, the model's last effect, ends on its range's end: the best fit with it
+  /// inside, if any.
+  std::optional<Fit> speed_friction_inside(const std::vector<const Run*>& runs,
+                                           const std::vector<Effect>& effects, const Fit& best,
+                                           const RunsKey& key) const;
   MfParams baseline_, neutral_;
   std::map<std::pair<RunsKey, std::vector<Effect>>, std::vector<double>> fitted_;
   /// Per model, its fit over the most points so far and that fit's mean square.
