@@ -174,7 +174,7 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   std::vector<double> e_add(n, 0.0);
   // The force-side effects first; the slip-side ones (relaxation, slip offset, time offset) are
   // then applied in that order whatever the order of `effects` (they commute but for the initial
-  // state of the relaxation, which needs the force side).
+  // state of the relaxation, which needs the force side), and speed friction at their slip.
   double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0, cap_n = INFINITY, lambda_mu_v = 0;
   bool relaxation = false, threshold = false;
   // A load following the deceleration a: D by 1 + q a, B C D by (1 + q a)^ratio, E by e q a.
@@ -284,8 +284,9 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   // encoders' slip, which leads a relaxing contact's by sigma / V: read on it the friction falls
   // too early.
   if (lambda_mu_v != 0) {
-    const std::vector<double> v_mps =
-        dt_s != 0 ? read_earlier(r.t_s, r.v_ref_mps, dt_s) : r.v_ref_mps;
+    std::vector<double> earlier;  // the speed a late channel shows (predict runs per iteration)
+    if (dt_s != 0) earlier = read_earlier(r.t_s, r.v_ref_mps, dt_s);
+    const std::vector<double>& v_mps = dt_s != 0 ? earlier : r.v_ref_mps;
     for (std::size_t i = 0; i < n; ++i) {
       const double mu = 1.0 / (1.0 + lambda_mu_v * std::abs(slip[i]) * v_mps[i] / kLongVl);
       d_scale[i] *= mu;
