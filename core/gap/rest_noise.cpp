@@ -3,12 +3,14 @@
 // smoother's gain. An encoder's once-per-revolution ripple is not noise: a ripple taken out of
 // the run is taken out of its rest the same way (at 50 Hz a wheel at 130 km/h turns 20 times a
 // second and its ripple reads as a noise ten times the speeds'). The same rests check a ripple's
-// amplitude read on the runs' residual, which on short runs can hold an effect's bend.
+// amplitude read on the runs' residual, which on short runs can hold an effect's bend, and read
+// it, with its phase, where no run turns the encoder often enough to.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include "core/gap/internal.hpp"
 
@@ -142,32 +144,94 @@ void measure_rest_noise(Run& r, const SpeedRipple& ripple) {
       p.gain_mps;
 }
 
+namespace {
+
+struct RestOwn {
+  double amplitude = 0.0, se = 0.0;
+  double c = 0.0, s = 0.0;  ///< the slip's coefficients on (1 - s) cos and sin of the angle
+};
+/// A rest's own ripple of one encoder and its standard error; nullopt where the rest cannot
+/// resolve one (too few samples, under a fraction of a revolution). Checked against a ripple
+/// read on the runs, the rest fits a level and that encoder's cos and sin. Read alone
+/// (`alone`), it fits both encoders' (the other's ripple is in the rest's slip too) and leaves
+/// out the samples more than kRestOutlierSds robust deviations off that fit, refitted: the
+/// rest's last samples can hold the wheel starting to slow behind a lagging pressure channel (a
+/// 12 ms filter: 0.011 of slip against a 4e-4 ripple, which then read as noise 3x its size).
+std::optional<RestOwn> rest_own_ripple(const Run::RestProbe& probe, std::size_t encoder,
+                                       bool alone = false) {
+  constexpr double kRestOutlierSds = 5.0;
+  RestFit f = rest_fit(probe, {encoder == 0 || alone, encoder == 1 || alone});
+  const Eigen::Index c = alone && encoder == 1 ? 3 : 1;  // the encoder's cos column
+  for (int pass = 0;; ++pass) {
+    const Eigen::MatrixXd& a = f.a;
+    if (a.rows() < a.cols() + kRestFitSpareSamples) return std::nullopt;
+    const Eigen::MatrixXd ata = a.transpose() * a;
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(ata);
+    if (!lu.isInvertible()) return std::nullopt;
+    const Eigen::VectorXd x = lu.solve(a.transpose() * f.b);
+    const Eigen::VectorXd resid = f.b - a * x;
+    std::vector<double> dev(resid.data(), resid.data() + resid.size());
+    for (double& d : dev) d = std::abs(d);
+    const double limit = kRestOutlierSds * 1.4826 * upper_median(dev);
+    std::vector<Eigen::Index> keep;
+    for (Eigen::Index j = 0; j < resid.size(); ++j)
+      if (std::abs(resid(j)) <= limit) keep.push_back(j);
+    if (!alone || pass > 0 || !(limit > 0) ||
+        keep.size() == static_cast<std::size_t>(resid.size())) {
+      const double var = resid.squaredNorm() / static_cast<double>(a.rows() - a.cols());
+      const Eigen::MatrixXd cov = var * lu.inverse();
+      return RestOwn{std::hypot(x(c), x(c + 1)), std::sqrt(0.5 * (cov(c, c) + cov(c + 1, c + 1))),
+                     x(c), x(c + 1)};
+    }
+    f.a = a(keep, Eigen::all).eval();
+    f.b = f.b(keep).eval();
+  }
+}
+
+constexpr double kRestSigmas = 3.0;
+
+}  // namespace
+
 RestRippleCheck rest_ripple_check(const std::vector<Run>& runs, std::size_t encoder,
                                   double amplitude) {
-  constexpr double kSigmas = 3.0;
   RestRippleCheck out;
   std::vector<double> owns;  // each judging rest's own amplitude
   for (const Run& r : runs) {
     if (!r.rest_probe) continue;
-    const RestFit f = rest_fit(*r.rest_probe, {encoder == 0, encoder == 1});
-    const Eigen::MatrixXd& a = f.a;
-    if (a.rows() < a.cols() + kRestFitSpareSamples) continue;
-    const Eigen::MatrixXd ata = a.transpose() * a;
-    const Eigen::FullPivLU<Eigen::MatrixXd> lu(ata);
-    if (!lu.isInvertible()) continue;  // a rest under a fraction of a revolution
-    const Eigen::VectorXd x = lu.solve(a.transpose() * f.b);
-    const double var = (f.b - a * x).squaredNorm() / static_cast<double>(a.rows() - a.cols());
-    const Eigen::MatrixXd cov = var * lu.inverse();
-    const double se = std::sqrt(0.5 * (cov(1, 1) + cov(2, 2)));
-    if (!(kSigmas * se < amplitude)) continue;  // this rest could not see it
-    const double own = std::hypot(x(1), x(2));
-    owns.push_back(own);
-    out.largest_rest_amplitude = std::max(out.largest_rest_amplitude, own);
-    if (amplitude - own > kSigmas * se) ++out.refuted;
+    const auto own = rest_own_ripple(*r.rest_probe, encoder);
+    if (!own || !(kRestSigmas * own->se < amplitude)) continue;  // this rest could not see it
+    owns.push_back(own->amplitude);
+    out.largest_rest_amplitude = std::max(out.largest_rest_amplitude, own->amplitude);
+    if (amplitude - own->amplitude > kRestSigmas * own->se) ++out.refuted;
   }
   out.judged = static_cast<int>(owns.size());
   if (!owns.empty()) out.rest_amplitude = upper_median(owns);
   return out;
+}
+
+double rest_ripple_amplitude(const std::vector<Run>& runs, std::size_t encoder) {
+  std::vector<double> owns;
+  int seen = 0;
+  for (const Run& r : runs) {
+    if (!r.rest_probe) continue;
+    const auto own = rest_own_ripple(*r.rest_probe, encoder, true);
+    if (!own) continue;
+    owns.push_back(own->amplitude);
+    if (own->amplitude > kRestSigmas * own->se) ++seen;
+  }
+  return 2 * seen > static_cast<int>(owns.size()) ? upper_median(owns) : 0.0;
+}
+
+std::optional<std::array<double, 2>> rest_ripple_phase(const Run& r, std::size_t encoder,
+                                                       double amplitude) {
+  if (!r.rest_probe) return std::nullopt;
+  const auto own = rest_own_ripple(*r.rest_probe, encoder, true);
+  if (!own || !(own->amplitude > kRestSigmas * own->se) || own->amplitude < 0.5 * amplitude ||
+      own->amplitude > 2 * amplitude)
+    return std::nullopt;
+  // A speed read as v (1 + eps) puts -(1 - s) eps_wheel and +(1 - s) eps_ref into the slip.
+  const double sign = (encoder == 0 ? -1.0 : 1.0) * amplitude / own->amplitude;
+  return std::array<double, 2>{sign * own->c, sign * own->s};
 }
 
 }  // namespace brakefit::gap

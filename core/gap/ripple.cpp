@@ -316,6 +316,26 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
       for (RippleFit& f : fits) f.used[e] = false;
     }
   }
+  // No run turns an encoder kMinRevolutions (a truck's wheel at 45-80 km/h turns once or twice
+  // in a 0.3 s stop, and its 4e-4 ripple, 120 N on the tyre's slope, was left in the runs and out
+  // of their floor): its amplitude is read on the rests, where the slip is flat and no effect
+  // bends it, and pass 2 places its phase in each run.
+  std::string rest_note;
+  std::array<bool, 2> from_rests{};
+  for (std::size_t e = 0; e < 2; ++e) {
+    if (!amps[e].empty()) continue;
+    if (e == 1 &&
+        std::all_of(runs.begin(), runs.end(), [](const Run& r) { return r.ref_ripple_from_speed; }))
+      continue;
+    if (const double a = rest_ripple_amplitude(runs, e); a > 0 && a < 0.01) {
+      amplitude[e] = a;
+      from_rests[e] = true;
+      rest_note += fmt::format(
+          "; no run turns the {} {} times, and its amplitude is read on the "
+          "runs' rests before the brake",
+          e == 0 ? "wheel" : "reference", kMinRevolutions);
+    }
+  }
   // Pass 2: shorter runs (and longer ones whose own estimate did not pass) take that amplitude
   // and their phase from a regression with a linear trend, when that regression's own amplitude
   // agrees with it (within a factor of 2); a run under half a revolution from a scan of the
@@ -331,6 +351,14 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     const RippleFit short_fit = fit_ripple(columns[k], prep[k].residual, use, 1);
     for (std::size_t e = 0; e < 2; ++e) {
       if (!use[e]) continue;
+      // A run whose own rest holds the ripple read there takes its phase from it.
+      if (const auto cs =
+              from_rests[e] ? rest_ripple_phase(runs[k], e, amplitude[e]) : std::nullopt) {
+        fits[k].used[e] = true;
+        fits[k].c[e] = (*cs)[0];
+        fits[k].s[e] = (*cs)[1];
+        continue;
+      }
       const double amp = std::hypot(short_fit.c[e], short_fit.s[e]);
       if (prep[k].revolutions[e] >= kMinPhaseRevolutions && amp > 0.5 * amplitude[e] &&
           amp < 2 * amplitude[e]) {
@@ -389,13 +417,13 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   return fmt::format(
       "encoder ripple (once per revolution: an eccentric or unevenly divided code wheel) was "
       "found and taken out of the slip in {} of {} runs (amplitude of the speed: wheel {:.2g}, "
-      "reference {:.2g}){}{}",
+      "reference {:.2g}){}{}{}",
       corrected, runs.size(), amplitude[0], amplitude[1],
       uncorrected ? fmt::format("; where a run was too short to place its phase ({} encoder "
                                 "runs), it stays in the run and in its noise floor",
                                 uncorrected)
                   : std::string(),
-      refuted_note);
+      refuted_note, rest_note);
 }
 
 }  // namespace brakefit::gap

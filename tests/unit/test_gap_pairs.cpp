@@ -377,3 +377,19 @@ TEST(GapPairs, SpeedFrictionOnItsRangesEndIsRefittedFromInside) {
   EXPECT_TRUE(p.res.correct()) << p.why;
   EXPECT_NEAR(p.res.estimate, p.res.truth.magnitude, 0.1 * p.res.truth.magnitude) << p.why;
 }
+
+// A truck's two runs at 43-78 km/h turn its wheel 1.1-1.4 times: no run reads the wheel encoder's
+// ripple (4.1e-4 of the speed, 120 N on the tyre's slope), which was left in the runs and out of
+// their floor. The rests before the brake, where the slip is flat, read it, and each run's rest
+// places its phase. Generator B's ground pair 39 from every export.
+TEST(GapPairs, AWheelsRippleNoRunTurnsEnoughToReadIsReadOnTheRests) {
+  const RefereePair p = every_export_ground_pair(39);
+  const auto note = std::find_if(p.res.notes.begin(), p.res.notes.end(), [](const std::string& n) {
+    return n.find("read on the runs' rests") != std::string::npos;
+  });
+  ASSERT_NE(note, p.res.notes.end()) << p.why;
+  EXPECT_NE(note->find("in 2 of 2 runs"), std::string::npos) << *note;
+  const std::size_t at = note->find("wheel ");
+  ASSERT_NE(at, std::string::npos) << *note;
+  EXPECT_NEAR(std::stod(note->substr(at + 6)), 4.12e-4, 0.1 * 4.12e-4) << *note;
+}
