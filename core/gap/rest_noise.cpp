@@ -172,7 +172,7 @@ std::optional<RestOwn> rest_own_ripple(const Run::RestProbe& probe, std::size_t 
     const Eigen::VectorXd resid = f.b - a * x;
     std::vector<double> dev(resid.data(), resid.data() + resid.size());
     for (double& d : dev) d = std::abs(d);
-    const double limit = kRestOutlierSds * 1.4826 * upper_median(dev);
+    const double limit = kRestOutlierSds * 1.4826 * upper_median(dev);  // 1.4826 MAD: a normal sd
     std::vector<Eigen::Index> keep;
     for (Eigen::Index j = 0; j < resid.size(); ++j)
       if (std::abs(resid(j)) <= limit) keep.push_back(j);
