@@ -224,15 +224,16 @@ struct RestRippleCheck {
 };
 RestRippleCheck rest_ripple_check(const std::vector<Run>& runs, std::size_t encoder,
                                   double amplitude);
-/// An encoder's relative ripple amplitude read on the runs' rests alone, where the slip is flat
-/// and no effect bends it: the median of the rests that resolve one, when most of them see it
-/// (3 of its standard errors); 0 otherwise.
-double rest_ripple_amplitude(const std::vector<Run>& runs, std::size_t encoder);
-/// The phase of an encoder's ripple of that amplitude in a run, read on its rest before the brake
-/// (whose angles run on into the run's): its cos and sin coefficients of the speed, where the
-/// rest resolves one within a factor of 2 of the amplitude.
-std::optional<std::array<double, 2>> rest_ripple_phase(const Run& r, std::size_t encoder,
-                                                       double amplitude);
+/// An encoder's ripple read on the runs' rests alone, where the slip is flat and no effect bends
+/// it. amplitude: the median of the rests that resolve one, when most of them see it (3 of its
+/// standard errors); 0 otherwise. phase: per run, the cos and sin coefficients of the speed at
+/// that amplitude, where the run's own rest (whose angles run on into the run's) sees it within
+/// a factor of 2 of it.
+struct RestRipple {
+  double amplitude = 0.0;
+  std::vector<std::optional<std::array<double, 2>>> phase;
+};
+RestRipple rest_ripple(const std::vector<Run>& runs, std::size_t encoder);
 
 /// The noise a channel keeps after the smoother (half window), measured on the channel: right
 /// for white, anti-correlated and correlated errors alike.

@@ -209,29 +209,30 @@ RestRippleCheck rest_ripple_check(const std::vector<Run>& runs, std::size_t enco
   return out;
 }
 
-double rest_ripple_amplitude(const std::vector<Run>& runs, std::size_t encoder) {
+RestRipple rest_ripple(const std::vector<Run>& runs, std::size_t encoder) {
+  RestRipple out;
+  out.phase.resize(runs.size());
+  std::vector<std::optional<RestOwn>> own(runs.size());
   std::vector<double> owns;
   int seen = 0;
-  for (const Run& r : runs) {
-    if (!r.rest_probe) continue;
-    const auto own = rest_own_ripple(*r.rest_probe, encoder, true);
-    if (!own) continue;
-    owns.push_back(own->amplitude);
-    if (own->amplitude > kRestSigmas * own->se) ++seen;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    if (runs[k].rest_probe) own[k] = rest_own_ripple(*runs[k].rest_probe, encoder, true);
+    if (!own[k]) continue;
+    owns.push_back(own[k]->amplitude);
+    if (own[k]->amplitude > kRestSigmas * own[k]->se) ++seen;
   }
-  return 2 * seen > static_cast<int>(owns.size()) ? upper_median(owns) : 0.0;
-}
-
-std::optional<std::array<double, 2>> rest_ripple_phase(const Run& r, std::size_t encoder,
-                                                       double amplitude) {
-  if (!r.rest_probe) return std::nullopt;
-  const auto own = rest_own_ripple(*r.rest_probe, encoder, true);
-  if (!own || !(own->amplitude > kRestSigmas * own->se) || own->amplitude < 0.5 * amplitude ||
-      own->amplitude > 2 * amplitude)
-    return std::nullopt;
-  // A speed read as v (1 + eps) puts -(1 - s) eps_wheel and +(1 - s) eps_ref into the slip.
-  const double sign = (encoder == 0 ? -1.0 : 1.0) * amplitude / own->amplitude;
-  return std::array<double, 2>{sign * own->c, sign * own->s};
+  if (!(2 * seen > static_cast<int>(owns.size()))) return out;
+  out.amplitude = upper_median(owns);
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const auto& o = own[k];
+    if (!o || !(o->amplitude > kRestSigmas * o->se) || o->amplitude < 0.5 * out.amplitude ||
+        o->amplitude > 2 * out.amplitude)
+      continue;
+    // A speed read as v (1 + eps) puts -(1 - s) eps_wheel and +(1 - s) eps_ref into the slip.
+    const double scale = (encoder == 0 ? -1.0 : 1.0) * out.amplitude / o->amplitude;
+    out.phase[k] = std::array<double, 2>{scale * o->c, scale * o->s};
+  }
+  return out;
 }
 
 }  // namespace brakefit::gap

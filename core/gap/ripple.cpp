@@ -321,15 +321,15 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
   // of their floor): its amplitude is read on the rests, where the slip is flat and no effect
   // bends it, and pass 2 places its phase in each run.
   std::string rest_note;
-  std::array<bool, 2> from_rests{};
+  std::array<RestRipple, 2> rests;  // per encoder, where its amplitude is the rests'
   for (std::size_t e = 0; e < 2; ++e) {
     if (!amps[e].empty()) continue;
     if (e == 1 &&
         std::all_of(runs.begin(), runs.end(), [](const Run& r) { return r.ref_ripple_from_speed; }))
       continue;
-    if (const double a = rest_ripple_amplitude(runs, e); a > 0 && a < 0.01) {
-      amplitude[e] = a;
-      from_rests[e] = true;
+    if (RestRipple r = rest_ripple(runs, e); r.amplitude > 0 && r.amplitude < 0.01) {
+      amplitude[e] = r.amplitude;
+      rests[e] = std::move(r);
       rest_note += fmt::format(
           "; no run turns the {} {} times, and its amplitude is read on the "
           "runs' rests before the brake",
@@ -352,8 +352,7 @@ std::string remove_encoder_ripple(std::vector<Run>& runs, const std::vector<doub
     for (std::size_t e = 0; e < 2; ++e) {
       if (!use[e]) continue;
       // A run whose own rest holds the ripple read there takes its phase from it.
-      if (const auto cs =
-              from_rests[e] ? rest_ripple_phase(runs[k], e, amplitude[e]) : std::nullopt) {
+      if (const auto& cs = rests[e].phase.empty() ? std::nullopt : rests[e].phase[k]) {
         fits[k].used[e] = true;
         fits[k].c[e] = (*cs)[0];
         fits[k].s[e] = (*cs)[1];
