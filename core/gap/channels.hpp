@@ -52,6 +52,21 @@ inline double line_force_n(const Run& r, std::size_t i) {
   return r.force_n[i] +
          (rate ? r.pressure_filter_s * r.brake_gain_n_per_bar * r.pressure_rate_bar_per_s[i] : 0.0);
 }
+/// Least-squares line through the samples of the first window_s of a series.
+struct StartLine {
+  double at_start = 0.0, slope = 0.0;
+  int points = 0;
+};
+StartLine start_line(const std::vector<double>& t_s, const std::vector<double>& x, double window_s);
+/// A run's force is read at its start on a line through this much of it: a 250 bar/s ramp adds
+/// 170 N in 10 ms, so a mean would sit half of that too high.
+constexpr double kStartForceWindowS = 0.02;
+/// The line's force at a run's first sample. Without a filter, start_line's. Behind a declared
+/// filter (filter_s > 0), the ramp the line makes: its rate read where the channel has settled to
+/// it, its onset where the filtered ramp meets the channel's first samples (a ramp begun before
+/// the run's start shows in the line, not yet in the channel).
+double line_force_at_start(const std::vector<double>& t_s, const std::vector<double>& force_n,
+                           double filter_s);
 /// The middle of v (of an even count, the upper of the two middles), by partial sorting in place:
 /// the robust centre the conditioning's noise, step and speed estimates share. Not empty.
 inline double upper_median(std::vector<double>& v) {

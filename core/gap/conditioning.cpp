@@ -27,32 +27,6 @@ void take_droop(Run& r, RollerDroop&& d, double step_mps, double roller_radius_m
   r.roller_droop_lag_s = d.lag_s;
 }
 
-/// Least-squares line through the samples of the first window_s of a run.
-struct StartLine {
-  double at_start = 0.0, slope = 0.0;
-  int points = 0;
-};
-StartLine start_line(const std::vector<double>& t_s, const std::vector<double>& x,
-                     double window_s) {
-  double st = 0, sx = 0, stt = 0, stx = 0;
-  StartLine l;
-  for (std::size_t i = 0; i < t_s.size() && t_s[i] - t_s[0] <= window_s; ++i, ++l.points) {
-    const double t = t_s[i] - t_s[0];
-    st += t;
-    sx += x[i];
-    stt += t * t;
-    stx += t * x[i];
-  }
-  const double m = l.points, den = m * stt - st * st;
-  if (den > 0) {
-    l.slope = (m * stx - st * sx) / den;
-    l.at_start = (sx * stt - st * stx) / den;
-  } else if (l.points > 0) {
-    l.at_start = sx / m;
-  }
-  return l;
-}
-
 }  // namespace
 
 /// The initial slip rate is fitted over this much of the run's start.
@@ -378,12 +352,11 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   for (double& d : dref) d = -d;
   full.ref_decel_mps2 = dref;
   full.pressure_rate_bar_per_s = derivative(full.t_s, smooth(pressure, half_window));
-  // Start state: the slip rate (a line through the first kInitialWindowS) and the force at the
-  // first sample (a line through the first 20 ms: a 250 bar/s ramp adds 170 N in 10 ms, so a mean
-  // would sit half of that too high).
+  // Start state: the slip rate (a line through the first kInitialWindowS) and the line's force at
+  // the first sample.
   if (const StartLine slip = start_line(full.t_s, full.slip, kInitialWindowS); slip.points >= 3)
     full.initial_slip_rate_per_s = std::max(0.0, slip.slope);
-  full.initial_force_n = start_line(full.t_s, full.force_n, 0.02).at_start;
+  full.initial_force_n = line_force_at_start(full.t_s, full.force_n, full.pressure_filter_s);
   return decimate(std::move(full), o.max_points);
 }
 

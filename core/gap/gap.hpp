@@ -206,8 +206,8 @@ struct Run {
   /// Slip rate at the start of the run (least squares over its first 40 ms, full rate): before
   /// the event the slip is taken as the ramp from zero at this rate (time offset).
   double initial_slip_rate_per_s = 0.0;
-  /// Force at the first sample (a line through the first 20 ms): sets the relaxation's initial
-  /// transient slip.
+  /// The line's force at the first sample (line_force_at_start: behind a declared pressure
+  /// filter, the ramp the line had made): sets the relaxation's initial transient slip.
   double initial_force_n = 0.0;
   /// The run was cut at a lock-up runaway; the force at its last kept sample.
   bool runaway = false;
