@@ -1,5 +1,5 @@
 // Levelling: the runs' slip biases from a constant quantised reference (a roller held at one
-// speed, read in steps) are taken from their intercepts at zero force; each lag model levels at
+// speed, read in steps) are taken from their intercepts at zero force; a time offset levels at
 // its own lag (Run::ref_bias_per_lag).
 #include <fmt/format.h>
 
@@ -122,7 +122,7 @@ std::string level_reference_biases(std::vector<Run>& runs) {
   if (offset.empty()) return {};
   // A time offset moves each run's intercept by its slip rate times the lag: levelled at zero
   // lag, the biases would take the lag's signature in the linear region (a 12 ms lag on
-  // generator B's roller was fitted as 3-6 ms). The lag models level at their own lag: the
+  // generator B's roller was fitted as 3-6 ms). A time offset levels at its own lag: the
   // biases' change per second of lag is kept (ref_bias_per_lag, see predict).
   const std::vector<double> lagged = intercept_offsets(runs, kLevellingLagProbeS);
   double largest = 0;
