@@ -1,10 +1,8 @@
 // The line's force at a run's start behind a declared pressure filter: the ramp the line had made
 // before the channel showed it, the force a relaxing contact's transient slip starts from.
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <string>
 #include <vector>
 
 #include "core/gap/channels.hpp"
@@ -12,6 +10,7 @@
 #include "core/gap/internal.hpp"
 #include "sim/referee.hpp"
 #include "sim/second/generator.hpp"
+#include "tests/unit/b_runs_test_util.hpp"
 
 using namespace brakefit;
 
@@ -45,14 +44,7 @@ TEST(GapLineForce, AFilteredRampsOnsetBeforeTheRunGivesTheLinesForceAtItsStart) 
 TEST(GapLineForce, ARelaxingContactStartsFromTheLinesForceBehindADeclaredFilter) {
   auto set = sim2::draw_set(can::BenchKind::Ground, {{"relaxation_length", 0.357}}, 801039,
                             sim2::Stations::Every);
-  std::vector<gap::Run> runs;
-  for (std::size_t k = 0; k < set.runs.size(); ++k) {
-    auto& tx = set.runs[k].tester;
-    tx.eccentricity_ref = tx.eccentricity_wheel = 0;
-    tx.speed_step_mps = tx.pressure_step_bar = tx.pressure_noise_bar = tx.jitter_ratio = 0;
-    tx.pressure_filter_s = 0.012;
-    sim::append_event_csv_runs(runs, sim2::simulate_event_csv(set.runs[k]), fmt::format("r{}", k));
-  }
+  const std::vector<gap::Run> runs = test::ideal_runs(set, 0.012);
   ASSERT_FALSE(runs.empty()) << set.station;
   const std::vector<gap::Effect> model{gap::Effect::RelaxationLength};
   const gap::Fit f = gap::fit_runs(gap::pointers(runs), model, sim::pooled_start(runs));

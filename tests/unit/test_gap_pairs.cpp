@@ -1,6 +1,5 @@
 // Two effects injected into one set: the referee's draws and scoring of a pair, and forward
 // selection naming both (bench/gap_referee --pairs runs them by the hundred).
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +12,7 @@
 #include "core/gap/internal.hpp"
 #include "sim/referee.hpp"
 #include "sim/second/generator.hpp"
+#include "tests/unit/b_runs_test_util.hpp"
 
 using namespace brakefit;
 
@@ -49,20 +49,6 @@ RefereePair every_export_ground_pair(int index) {
   gates.bic_margin_per_point = 0.2379;
   gates.noise_factor = 2.13;
   return referee_pair(gap::Condition::Ground, sim::Generator::B, index, gates);
-}
-
-/// A generator B set's runs with the encoders and the pressure ideal (no ripple, steps, filter,
-/// noise or jitter): nothing in the way of the effects' laws.
-std::vector<gap::Run> ideal_runs(sim2::SetDraw& set) {
-  std::vector<gap::Run> runs;
-  for (std::size_t k = 0; k < set.runs.size(); ++k) {
-    auto& tx = set.runs[k].tester;
-    tx.eccentricity_ref = tx.eccentricity_wheel = 0;
-    tx.speed_step_mps = tx.pressure_filter_s = tx.pressure_step_bar = tx.pressure_noise_bar = 0;
-    tx.jitter_ratio = 0;
-    sim::append_event_csv_runs(runs, sim2::simulate_event_csv(set.runs[k]), fmt::format("r{}", k));
-  }
-  return runs;
 }
 
 }  // namespace
@@ -193,7 +179,7 @@ TEST(GapPairs, AWheelsInertiaIsInALateChannelAsLateAsTheTyresForce) {
   // the pressure ideal (nothing else in the way) both are found at their values.
   auto set = sim2::draw_set(can::BenchKind::Roller,
                             {{"time_offset", 0.02852}, {"wheel_inertia", 2.562}}, 4242);
-  const std::vector<gap::Run> runs = ideal_runs(set);
+  const std::vector<gap::Run> runs = test::ideal_runs(set);
   const auto rep =
       gap::diagnose(runs, sim::pooled_start(runs), gap::calibrated_options(gap::Condition::Roller));
   const auto at = [&](gap::Effect e) { return gap::param_offset(rep.accepted, e); };
@@ -360,7 +346,7 @@ TEST(GapPairs, SpeedFrictionFallsWithTheSlidingOfTheSlipTheCurveIsReadAt) {
   // the pressure ideal: both are found at their values.
   auto set = sim2::draw_set(can::BenchKind::Ground,
                             {{"relaxation_length", 0.3}, {"speed_friction", 1.5}}, 4343);
-  const std::vector<gap::Run> runs = ideal_runs(set);
+  const std::vector<gap::Run> runs = test::ideal_runs(set);
   const std::vector<gap::Effect> model{gap::Effect::RelaxationLength, gap::Effect::SpeedFriction};
   const gap::Fit f = gap::fit_runs(gap::pointers(runs), model, sim::pooled_start(runs));
   EXPECT_NEAR(f.params[4], 0.3, 0.03 * 0.3);
