@@ -260,6 +260,9 @@ double smoothing_noise_gain(int half_window);
 /// Levels the runs' slip biases from a constant quantised reference (Run::ref_bias_bound): the
 /// slip at zero force is taken common to all runs. Returns a note for the report (empty: none).
 std::string level_reference_biases(std::vector<Run>& runs);
+/// How far the bias levelled for run r moves when the slip compared with the force is a contact's
+/// relaxed over sigma_m (interpolated on the levelling's grid of lengths; 0 where not levelled).
+double relaxation_level_change(const Run& r, double sigma_m);
 
 /// Estimates each run's once-per-revolution encoder ripple (wheel and reference, for runs that
 /// span 1.5 revolutions) from the residual of the baseline (params, with its nuisance terms)

@@ -190,6 +190,9 @@ struct Run {
   /// per second of a lag (levelled at the lag, the slip compared with the force is taken
   /// earlier): the lag models (time offset, relaxation at one speed) level at their own lag.
   double ref_bias_wanted = 0.0, ref_bias_per_lag = 0.0;
+  /// How the bias the levelling wants moves with a relaxation's length (the contact's slip
+  /// compared with the force), at the lengths of the levelling's grid (relaxation_level_change).
+  std::vector<double> ref_bias_by_sigma;
   /// A wheel speed quantised and held on one level at the run's start (a roller's wheel rolling
   /// free): the level (m/s) and its step, and when it first left it (s; -inf: not held). The
   /// rebuilt channel follows the first crossings' line back to the level's edge (the wheel read

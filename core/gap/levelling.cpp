@@ -1,9 +1,10 @@
 // Levelling: the runs' slip biases from a constant quantised reference (a roller held at one
 // speed, read in steps) are taken from their intercepts at zero force; a time offset levels at
-// its own lag (Run::ref_bias_per_lag).
+// its own lag (Run::ref_bias_per_lag), a relaxation at its own length (Run::ref_bias_by_sigma).
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/gap/internal.hpp"
@@ -12,23 +13,32 @@ namespace brakefit::gap {
 
 namespace {
 
+/// The relaxation lengths at which the levelling's change is read (m, the fit's range);
+/// predict interpolates between them.
+constexpr std::array<double, 15> kLevellingSigmaM = {0.0, 0.025, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4,
+                                                     0.5, 0.65,  0.8,  1.0, 1.3,  1.6, 2.0};
+
 /// Each run's intercept at zero force less the runs' mean: a line of common slope with an
 /// intercept per run through the linear region (5-30 % of the largest force), the slip taken
 /// lag_s earlier than the force (and the declared filter's tau: a filtered force channel shows
-/// the linear region's force of tau earlier, else each ramp rate would level to its own lag).
-/// Empty when a run has too little of the linear region.
+/// the linear region's force of tau earlier, else each ramp rate would level to its own lag),
+/// or relaxed over sigma_m (the contact's slip, which trails the encoders' by about sigma / V
+/// once the ramp has run that long, less on the run's first metres). Empty when a run has too
+/// little of the linear region.
 std::vector<double> intercept_offsets(const std::vector<Run>& runs, double lag_s,
-                                      double* mean_out = nullptr) {
+                                      double* mean_out = nullptr, double sigma_m = 0) {
   double peak = 0;
   for (const Run& r : runs)
     for (double f : r.force_n) peak = std::max(peak, f);
   std::vector<double> mf(runs.size()), ms(runs.size());
   std::vector<std::vector<double>> slips;
   for (const Run& r : runs) {
-    std::vector<double> s = r.slip;
+    std::vector<double> base = r.slip;
+    if (sigma_m > 0 && !base.empty()) base = relax(r, base, sigma_m, base.front());
+    std::vector<double> s = base;
     if (const double back = r.pressure_filter_s + lag_s; back != 0)
       for (std::size_t i = 0; i < s.size(); ++i)
-        s[i] = interp(r.t_s, r.slip, std::max(r.t_s.front(), r.t_s[i] - back));
+        s[i] = interp(r.t_s, base, std::max(r.t_s.front(), r.t_s[i] - back));
     slips.push_back(std::move(s));
   }
   double sff = 0, sfs = 0;
@@ -111,6 +121,16 @@ constexpr double kLevellingLagProbeS = 0.01;
 
 }  // namespace
 
+double relaxation_level_change(const Run& r, double sigma_m) {
+  if (r.ref_bias_by_sigma.size() != kLevellingSigmaM.size() || !(sigma_m > 0)) return 0.0;
+  const auto hi = std::upper_bound(kLevellingSigmaM.begin(), kLevellingSigmaM.end(), sigma_m);
+  if (hi == kLevellingSigmaM.end()) return r.ref_bias_by_sigma.back();
+  const auto i = static_cast<std::size_t>(hi - kLevellingSigmaM.begin());
+  const double w =
+      (sigma_m - kLevellingSigmaM[i - 1]) / (kLevellingSigmaM[i] - kLevellingSigmaM[i - 1]);
+  return (1 - w) * r.ref_bias_by_sigma[i - 1] + w * r.ref_bias_by_sigma[i];
+}
+
 std::string level_reference_biases(std::vector<Run>& runs) {
   // The slip at zero force is the same in every run (a slip offset is the runs' common effect):
   // each run's intercept less the mean intercept, within its bound, is its reference bias.
@@ -125,6 +145,13 @@ std::string level_reference_biases(std::vector<Run>& runs) {
   // generator B's roller was fitted as 3-6 ms). A time offset levels at its own lag: the
   // biases' change per second of lag is kept (ref_bias_per_lag, see predict).
   const std::vector<double> lagged = intercept_offsets(runs, kLevellingLagProbeS);
+  // A relaxation's lag, sigma / V, is 0.1-0.3 s on a roller, ten to thirty times the probe, and
+  // builds up over the run's first metres: no line carries it there, and levelled at none the
+  // biases take part of the lag's signature (the relaxation reads short). The change is read at
+  // each length of a grid instead.
+  std::vector<std::vector<double>> relaxed;
+  for (double sigma_m : kLevellingSigmaM)
+    relaxed.push_back(sigma_m > 0 ? intercept_offsets(runs, 0.0, nullptr, sigma_m) : offset);
   double largest = 0;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     Run& r = runs[k];
@@ -135,6 +162,8 @@ std::string level_reference_biases(std::vector<Run>& runs) {
     for (double& x : r.slip) x -= total - r.ref_bias_removed;
     r.ref_bias_removed = total;
     r.ref_bias_per_lag = lagged.empty() ? 0.0 : (lagged[k] - offset[k]) / kLevellingLagProbeS;
+    r.ref_bias_by_sigma.clear();
+    for (const auto& o : relaxed) r.ref_bias_by_sigma.push_back(o.empty() ? 0.0 : o[k] - offset[k]);
     largest = std::max(largest, std::abs(total));
   }
   hold_rest_at_foot(runs, mean_icpt);

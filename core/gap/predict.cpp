@@ -245,14 +245,14 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
     }
   }
   std::vector<double> slip = r.slip;
-  // A time offset levels the runs' reference biases at itself, not at none
-  // (level_reference_biases): the run's bias moves by level_shift. Not a relaxation: its lag,
-  // sigma / V, is 0.1-0.3 s on a roller, ten to thirty times the 10 ms over which the biases'
-  // change per lag is read, too far to carry that line.
+  // A lag (a time offset, a relaxation) levels the runs' reference biases at itself, not at
+  // none (level_reference_biases): the run's bias moves by level_shift.
   double level_shift = 0;
-  if (r.ref_bias_bound > 0 && r.ref_bias_per_lag != 0 && dt_s != 0) {
-    level_shift = r.ref_bias_removed - std::clamp(r.ref_bias_wanted + r.ref_bias_per_lag * dt_s,
-                                                  -r.ref_bias_bound, r.ref_bias_bound);
+  const double relaxed_change = relaxation ? relaxation_level_change(r, sigma_m) : 0.0;
+  if (r.ref_bias_bound > 0 && ((r.ref_bias_per_lag != 0 && dt_s != 0) || relaxed_change != 0)) {
+    level_shift = r.ref_bias_removed -
+                  std::clamp(r.ref_bias_wanted + r.ref_bias_per_lag * dt_s + relaxed_change,
+                             -r.ref_bias_bound, r.ref_bias_bound);
     for (double& s : slip) s += level_shift;
   }
   if (relaxation) {
