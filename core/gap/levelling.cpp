@@ -150,6 +150,7 @@ std::string level_reference_biases(std::vector<Run>& runs) {
   // biases take part of the lag's signature (the relaxation reads short). The change is read at
   // each length of a grid instead.
   std::vector<std::vector<double>> relaxed;
+  relaxed.reserve(kLevellingSigmaM.size());
   for (double sigma_m : kLevellingSigmaM)
     relaxed.push_back(sigma_m > 0 ? intercept_offsets(runs, 0.0, nullptr, sigma_m) : offset);
   double largest = 0;
