@@ -260,6 +260,10 @@ double smoothing_noise_gain(int half_window);
 /// Levels the runs' slip biases from a constant quantised reference (Run::ref_bias_bound): the
 /// slip at zero force is taken common to all runs. Returns a note for the report (empty: none).
 std::string level_reference_biases(std::vector<Run>& runs);
+/// The relaxation lengths at which the levelling's change is read (m, the fit's range; the first
+/// none): Run::ref_bias_by_sigma holds one entry a length, relaxation_level_change interpolates.
+inline constexpr std::array<double, 15> kLevellingSigmaM = {
+    0.0, 0.025, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0, 1.3, 1.6, 2.0};
 /// How far the bias levelled for run r moves when the slip compared with the force is a contact's
 /// relaxed over sigma_m (interpolated on the levelling's grid of lengths; 0 where not levelled).
 double relaxation_level_change(const Run& r, double sigma_m);

@@ -13,11 +13,6 @@ namespace brakefit::gap {
 
 namespace {
 
-/// The relaxation lengths at which the levelling's change is read (m, the fit's range);
-/// predict interpolates between them.
-constexpr std::array<double, 15> kLevellingSigmaM = {0.0, 0.025, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4,
-                                                     0.5, 0.65,  0.8,  1.0, 1.3,  1.6, 2.0};
-
 /// Each run's intercept at zero force less the runs' mean: a line of common slope with an
 /// intercept per run through the linear region (5-30 % of the largest force), the slip taken
 /// lag_s earlier than the force (and the declared filter's tau: a filtered force channel shows
