@@ -3,7 +3,7 @@
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
 //               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1]
 //               [--only EFFECT,...] [--pick I,...] [--why 1|2] [--pairs N] [--detection SETS]
-//               [--results FILE [--results-key K]]
+//               [--results FILE [--results-key K]] [--export-hz HZ]
 // Three generators make the runs: A, the project's simulator (candump logs), B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export), and C, a physics written outside the project (--gen-c, by default
@@ -57,6 +57,7 @@ int run(int argc, char** argv) {
   std::string trials_from;           // --trials-from: only these generators' trials (empty: all)
   std::string results, results_key;  // --results FILE [--results-key KEY]
   std::string stations = "cars";     // --stations: generator B's draws
+  std::string export_hz_text;        // --export-hz: generator B's export rate (empty: as drawn)
   bool crossed = true;
   st.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int i = 1; i < argc; i += 2) {
@@ -70,6 +71,8 @@ int run(int argc, char** argv) {
              "  [--trials-from C]      (only these generators' trials; gates from all)\n"
              "  [--stations cars|every] (generator B's sets: cars at 5 km/h and 30-70 km/h, or\n"
              "                         every export: 50-1000 Hz, 2-6 runs, heavy vehicles)\n"
+             "  [--export-hz HZ]      (generator B's sets, gates' and trials', exported at HZ\n"
+             "                         instead of their drawn rate: what the rate alone costs)\n"
              "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
              "  [--pick I,...]        (only these trials and pair trials, by the index a miss "
              "names)\n"
@@ -117,6 +120,8 @@ int run(int argc, char** argv) {
       trials_from = v;
     else if (k == "--stations")
       stations = v;
+    else if (k == "--export-hz")
+      export_hz_text = v;
     else if (k == "--only") {
       std::stringstream list(v);
       for (std::string e; std::getline(list, e, ',');) st.only.push_back(e);
@@ -137,6 +142,18 @@ int run(int argc, char** argv) {
     return 64;
   }
   sim::set_generator_b_stations(stations == "every" ? sim2::Stations::Every : sim2::Stations::Cars);
+  // A tester exports at 50 Hz to a few kHz; below 10 Hz a stop holds a sample or two.
+  double export_hz = 0;
+  if (!export_hz_text.empty()) {
+    char* end = nullptr;
+    export_hz = std::strtod(export_hz_text.c_str(), &end);
+    if (*end != '\0' || !(export_hz >= 10 && export_hz <= 20000)) {
+      std::cerr << "gap_referee: --export-hz is a rate from 10 to 20000 Hz, not '" << export_hz_text
+                << "'\n";
+      return 64;
+    }
+  }
+  sim::set_generator_b_export_hz(export_hz);
   if (!results.empty() && !std::ofstream(results, std::ios::app)) {  // before hours of trials
     std::cerr << "gap_referee: cannot write the results file " << results << "\n";
     return 73;
@@ -159,6 +176,7 @@ int run(int argc, char** argv) {
   j["version"] = kVersion;
   j["seed"] = st.seed;
   j["stations"] = stations;
+  if (export_hz > 0) j["export_hz"] = export_hz;
   bool any = false;
   for (auto c : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad}) {
     if (which != "all" && which != gap::to_string(c)) continue;

@@ -174,10 +174,15 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
 
 namespace {
 sim2::Stations g_stations = sim2::Stations::Cars;  // set once by the referee before its threads
+double g_export_hz = 0;                            // the same
 }  // namespace
 
 void set_generator_b_stations(sim2::Stations s) {
   g_stations = s;
+}
+
+void set_generator_b_export_hz(double hz) {
+  g_export_hz = hz;
 }
 
 std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, double sample_hz) {
@@ -191,8 +196,11 @@ std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, doubl
   if (inj.pair()) inj.magnitude2 = set.magnitudes.back();
   if (std::isfinite(inj.load_transfer_magnitude()))
     inj.load_per_decel = set.runs.front().load_per_decel;
-  if (sample_hz > 0)
+  if (sample_hz <= 0) sample_hz = g_export_hz;
+  if (sample_hz > 0) {
     for (auto& run : set.runs) run.tester.sample_hz = sample_hz;
+    inj.station += fmt::format(", exported at {:g} Hz", sample_hz);
+  }
   std::vector<gap::Run> out;
   for (std::size_t k = 0; k < set.runs.size(); ++k)
     append_event_csv_runs(out, sim2::simulate_event_csv(set.runs[k]), fmt::format("b{}", k));

@@ -66,12 +66,17 @@ Injection draw_pair(Rng& rng, gap::Condition c, Generator g = Generator::A);
 /// conditioned (an event too short to condition is skipped) and appended to out.
 void append_event_csv_runs(std::vector<gap::Run>& out, const std::string& text,
                            const std::string& name);
-/// sample_hz: the tester's export rate (0: the drawn set's own, 1 kHz). The stations drawn from
-/// are those set by set_generator_b_stations (Cars unless set).
+/// sample_hz: the tester's export rate (0: the one set by set_generator_b_export_hz, else the
+/// drawn set's own). The stations drawn from are those set by set_generator_b_stations (Cars
+/// unless set).
 std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, double sample_hz = 0);
 /// Which stations generator B draws its sets from, for every trial and calibration after the
 /// call (set once, before the referee's threads start).
 void set_generator_b_stations(sim2::Stations s);
+/// Every generator B set exported at this rate instead of its drawn one (0: the drawn rate), for
+/// every trial and calibration after the call (set once, before the referee's threads start):
+/// the same draws, what the export's rate alone costs the diagnosis.
+void set_generator_b_export_hz(double hz);
 /// The scenario with the injection switched on (everything else as in base). In the transfer
 /// condition roller_friction goes to the roller scenario, the others to the road.
 Scenario inject(Scenario base, const Injection& inj);

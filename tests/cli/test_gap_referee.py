@@ -71,6 +71,12 @@ class RefereeResults(unittest.TestCase):
         self.assertNotEqual(r.returncode, 0)
         self.assertIn("/nonexistent/dir/results.md", r.stderr)
 
+    def test_an_export_rate_outside_a_testers_range_is_an_error_naming_the_option(self):
+        for bad in ("5", "abc", "-100", "50000"):
+            r = referee("--trials", "1", "--export-hz", bad)
+            self.assertEqual(r.returncode, 64, bad)
+            self.assertIn("--export-hz", r.stderr)
+
     def test_a_generator_that_fails_stops_the_referee_instead_of_counting_refusals(self):
         # A set never made is not a set the diagnosis refused: the calibration once counted 20
         # "refused" null sets of generator C where its script could not import numpy.

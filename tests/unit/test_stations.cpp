@@ -61,6 +61,39 @@ TEST(Stations, EveryExportIsDrawn) {
   EXPECT_LT(heavy, sets / 2);
 }
 
+TEST(Stations, TheRefereesExportRateReexportsTheSameDraw) {
+  // --export-hz: the set drawn as before (tyre, vehicle, runs, effect), exported at another rate;
+  // the station says so. Ground seed 5's set is drawn at a rate other than 1 kHz.
+  sim::set_generator_b_stations(sim2::Stations::Every);
+  struct Restore {
+    ~Restore() {
+      sim::set_generator_b_export_hz(0);
+      sim::set_generator_b_stations(sim2::Stations::Cars);
+    }
+  } restore;
+  auto interval_ms = [](const std::vector<gap::Run>& runs) {
+    const auto& t = runs.front().t_s;
+    return 1e3 * (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  };
+  std::uint64_t seed = 1;
+  while (sim2::draw_set(can::BenchKind::Ground, "none", 0, seed, sim2::Stations::Every)
+             .runs.front()
+             .tester.sample_hz > 200)
+    ++seed;
+  sim::Injection drawn{"relaxation_length", 0.3, gap::Condition::Ground, sim::Generator::B};
+  sim::Injection again = drawn;
+  const auto as_drawn = sim::generator_b_runs(drawn, seed);
+  sim::set_generator_b_export_hz(1000);
+  const auto at_1khz = sim::generator_b_runs(again, seed);
+  ASSERT_EQ(at_1khz.size(), as_drawn.size()) << drawn.station;
+  EXPECT_GE(interval_ms(as_drawn), 4.0) << drawn.station;
+  // (a run of more than 400 samples is decimated for fitting: 1-1.5 ms apart)
+  EXPECT_LT(interval_ms(at_1khz), 1.5) << again.station;
+  EXPECT_EQ(again.station.rfind(drawn.station, 0), 0u) << again.station;
+  EXPECT_NE(again.station.find("exported at 1000 Hz"), std::string::npos) << again.station;
+  EXPECT_DOUBLE_EQ(again.magnitude, drawn.magnitude);
+}
+
 TEST(Stations, CarSetsAreTheReferees) {
   // The wider draws take their own random stream: a car set of a seed is what it was.
   const auto a = sim2::draw_set(can::BenchKind::Roller, "time_offset", 0.02, 7);
