@@ -14,36 +14,6 @@ namespace brakefit::gap {
 
 namespace {
 
-/// The encoders' ripple was estimated from the baseline's residual: where an effect bends the
-/// curve (a slip offset of 0.006 leaves 54 N), the ripple's fit takes part of that bend and puts
-/// it into the slip, which the effect's fit then cannot undo (B roller: 5.5 N left against a 2 N
-/// floor, 2.1 N with the encoders true). Once effects are named, the ripple is estimated again
-/// from the residual of the model with them, the runs levelled again, and the model refitted:
-/// the gap after, the floor and the named effects' parameters are that refit's. (The choice of
-/// effects stays the one made on the baseline's ripple.)
-void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& fit,
-                            const Options& o) {
-  const bool named = std::any_of(rep.accepted.begin(), rep.accepted.end(),
-                                 [](Effect e) { return !is_nuisance(e); });
-  if (!named) return;
-  const std::string ripple = remove_encoder_ripple(runs, rep.after.params, rep.accepted);
-  if (ripple.empty()) return;
-  level_reference_biases(runs);
-  const double before_n = rep.gap_after_rmse_n;
-  rep.after = fit(pointers(runs), rep.accepted);
-  rep.gap_after_rmse_n = heldout(runs, rep.accepted, fit);
-  rep.floor = noise_floor(runs, rep.before.params);
-  rep.noise_n = rep.floor.total_n();
-  take_joint_estimates(rep);  // the named effects' estimates: the refit's
-  rep.notes.push_back(fmt::format(
-      "with {} named, the encoders' ripple was estimated again from that model's residual ({}); "
-      "refitted, the held-out gap after is {:.1f} N ({:.1f} N with the baseline's estimate)",
-      fmt::join(rep.verdict.begin(),
-                std::find(rep.verdict.begin(), rep.verdict.end(), "unexplained"), ", "),
-      ripple, rep.gap_after_rmse_n, before_n));
-  name_verdict(rep, o);
-}
-
 /// Runs of a low-rate export (a fast stop at 50 Hz: 8-11 samples to the lock) are diagnosed with
 /// the others; the report says what such a run cannot tell on its own.
 std::string short_runs_note(const std::vector<Run>& runs) {
@@ -200,11 +170,11 @@ Report diagnose_runs(const std::vector<Run>& runs_in, const MfParams& start, con
     if ((e != Effect::CradleCap || roller) && (e != Effect::LoadTransfer || !roller) &&
         !(declared_load && e == Effect::LoadTransfer))
       candidates.push_back(e);
-  select_effects(rep, runs, candidates, fit, o,
-                 "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at "
-                 "other speeds or ramp rates would tell them apart",
-                 !cap);
-  if (!cap) ripple_against_effects(rep, runs, fit, o);
+  const char* separability =
+      "the data cannot separate {} from {} (held-out gains {:.3f} and {:.3f}); runs at other "
+      "speeds or ramp rates would tell them apart";
+  select_effects(rep, runs, candidates, fit, o, separability, !cap);
+  if (!cap) ripple_against_effects(rep, runs, fit, o, candidates, separability);
   measure_load_transfer(rep, runs, fit, o);
   if (cap) {
     // Found from how the runs end, not fitted: before, the baseline on the whole runs (the

@@ -153,6 +153,15 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
                     const Fitter& fit, const Options& o, const char* separability_note,
                     bool ripple_per_candidate);
 
+/// Once effects are named (ripple_against_effects.cpp): the encoders' ripple estimated again from
+/// the residual of their model, the runs levelled again and the model refitted (the gap after,
+/// the floor and the named effects' parameters are that refit's). Where the floor so read shows
+/// a structured gap the baseline's estimate hid, with at most two named, forward selection runs
+/// again on those runs and its report is taken where it leaves no structured gap.
+void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& fit,
+                            const Options& o, const std::vector<Effect>& candidates,
+                            const char* separability_note);
+
 /// Forward selection's state as its rounds end: the model so far (from the baseline's nuisance
 /// terms, never named), its fit and held-out error, and the runs they were scored on. An accepted
 /// candidate's own ripple replaces the runs; entry_runs keeps them as round 1 scored them.
@@ -297,12 +306,13 @@ struct RestThreshold {
   EffectScore score;
   std::string note;
 };
-/// The offset's fitted foot must lie below the rest (beyond its uncertainty) by a slip whose
-/// force, at the curve's initial stiffness, is at least this many noise floors: a threshold's
-/// force stands above the noise (generator C's single offsets, on a 40 N floor, rest within 3 %
-/// of the fitted offset).
-inline constexpr double kRestThresholdMinFloors = 3.0;
-/// ...and above what a free-rolling wheel carries at its rest: rolling resistance, drag and bind
+/// The offset's fitted foot must lie below the rest by more than the rest's uncertainty (three
+/// standard errors of its mean and half a quantisation step) and by a slip whose force, at the
+/// curve's initial stiffness, is more than a rolling wheel carries there. The rest is a mean over
+/// hundreds of samples: the force noise of one point (the floor) bounds no shift of it (a 1.29 bar
+/// threshold beside a -0.009 offset rested 83 N, 11 uncertainties, above the fitted foot on a
+/// 43 N floor; single offsets of generators A, B and C rest within 0.31 of that drag).
+/// The drag of a free-rolling wheel at its rest: rolling resistance, drag and bind
 /// (30-45 N on a car's wheel, physics.md: about 1 % of the wheel's load, read here as the curve's
 /// peak D) put the rest on the tyre's curve above its foot. A tyre's offset with a lag fitted
 /// beside it rests 11 N (0.3 % of D) above its fitted foot, where a 1.3 bar threshold leaves 129 N.

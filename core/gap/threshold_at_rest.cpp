@@ -38,8 +38,7 @@ std::optional<RestThreshold> threshold_at_rest(const std::vector<Run>& runs,
   const double below = rest.mean - foot;
   const double force_n = current.slip_stiffness_n() * below;
   const double drag_n = kRestDragPeakRatio * std::abs(curve_of(current.params).D);
-  if (rest.points < kOffsetMinRestPoints || below <= rest.uncertainty ||
-      force_n < std::max(kRestThresholdMinFloors * noise_n, drag_n))
+  if (rest.points < kOffsetMinRestPoints || below <= rest.uncertainty || force_n < drag_n)
     return std::nullopt;
   RestThreshold t;
   t.runs = runs;

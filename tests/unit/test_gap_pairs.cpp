@@ -13,45 +13,11 @@
 #include "sim/referee.hpp"
 #include "sim/second/generator.hpp"
 #include "tests/unit/b_runs_test_util.hpp"
+#include "tests/unit/referee_pair_test_util.hpp"
 
 using namespace brakefit;
-
-namespace {
-
-/// The referee's pair trial `index` as `bench/gap_referee --pairs` draws and seeds it (seed 1),
-/// diagnosed under the condition's shipped gates (or those given).
-struct RefereePair {
-  sim::Injection inj;
-  sim::TrialResult res;
-  std::string why;  ///< its scores and notes, for a failure's message
-};
-RefereePair referee_pair(gap::Condition c, sim::Generator g, int index,
-                         std::optional<gap::Options> gates = std::nullopt) {
-  const auto cn = static_cast<std::uint64_t>(c);
-  Rng rng(1 + 300 * cn + 7);
-  RefereePair p;
-  for (int t = 0; t <= index; ++t) p.inj = sim::draw_pair(rng, c, g);
-  p.res = sim::run_trial(p.inj, 1000 + 700'000 + static_cast<std::uint64_t>(index) + 100'000 * cn,
-                         gates.value_or(gap::calibrated_options(c)));
-  for (const auto& s : p.res.scores) p.why += "\n  " + s;
-  for (const auto& s : p.res.notes) p.why += "\n  " + s;
-  return p;
-}
-
-/// Generator B's ground pair `index` from every export, under the referee's gates for them.
-RefereePair every_export_ground_pair(int index) {
-  sim::set_generator_b_stations(sim2::Stations::Every);
-  struct Restore {
-    ~Restore() { sim::set_generator_b_stations(sim2::Stations::Cars); }
-  } restore;
-  gap::Options gates = gap::calibrated_options(gap::Condition::Ground);
-  gates.gate_gain = 0.101;
-  gates.bic_margin_per_point = 0.2379;
-  gates.noise_factor = 2.13;
-  return referee_pair(gap::Condition::Ground, sim::Generator::B, index, gates);
-}
-
-}  // namespace
+using brakefit::test::referee_pair;
+using brakefit::test::RefereePair;
 
 TEST(GapPairs, DrawsTwoDifferentEffectsAndNeverLagWithDelay) {
   for (auto [c, g] : {std::pair{gap::Condition::Roller, sim::Generator::A},
@@ -310,35 +276,6 @@ TEST(GapPairs, LoadTransferWithSpeedFrictionIsJudgedOnAllRuns) {
   })) << why;
 }
 
-// A threshold whose fitted tyre carries no force repeats the measured force (its gain is no
-// law's): it is refused, and neither rivals the law named nor stands as the runner-up. Generator
-// B's ground pair 39 from every export (a relaxation length with speed friction, two runs of a
-// truck): the threshold fits at 2.4 bar with a curve peaking at 0 N (gain 0.74), and the
-// relaxation length's 34 % was vetoed as two laws biting alike.
-TEST(GapPairs, ATyreCarryingNoForceIsNoRivalLaw) {
-  const RefereePair p = every_export_ground_pair(39);
-  ASSERT_EQ(p.inj.effect, "relaxation_length") << p.why;
-  auto noted = [&](const std::string& what) {
-    return std::any_of(p.res.notes.begin(), p.res.notes.end(),
-                       [&](const std::string& n) { return n.find(what) != std::string::npos; });
-  };
-  EXPECT_TRUE(noted("only with a tyre curve that peaks at")) << p.why;
-  EXPECT_FALSE(noted("brake_threshold, another law")) << p.why;
-}
-
-// Load transfer with speed friction, where a time offset passes the gates alone but takes 17 % of
-// the gap and would be vetoed by the fit-quality check: the pair is judged in-sample as where
-// nothing is named (left out, a run's load and its peak trade: 114 N held out, 2.6 N in-sample).
-// Generator B's ground pair 43 from every export (three runs of a car at 59-111 km/h).
-TEST(GapPairs, AFirstEffectTheFitQualityCheckVetoesLeavesALoadTransferPairInSample) {
-  const RefereePair p = every_export_ground_pair(43);
-  ASSERT_EQ(p.inj.effect, "load_transfer") << p.why;
-  ASSERT_EQ(p.inj.effect2, "speed_friction") << p.why;
-  EXPECT_TRUE(p.res.correct()) << p.why;
-  EXPECT_NEAR(p.res.estimate, p.res.truth.magnitude, 0.15 * p.res.truth.magnitude) << p.why;
-  EXPECT_NEAR(p.res.estimate2, p.res.truth.magnitude2, 0.15 * p.res.truth.magnitude2) << p.why;
-}
-
 TEST(GapPairs, SpeedFrictionFallsWithTheSlidingOfTheSlipTheCurveIsReadAt) {
   // A tyre's friction falls with the contact's sliding speed: behind a relaxation length that is
   // the transient slip's, which lags the encoders' by sigma / V. Read on the encoders' slip the
@@ -351,31 +288,4 @@ TEST(GapPairs, SpeedFrictionFallsWithTheSlidingOfTheSlipTheCurveIsReadAt) {
   const gap::Fit f = gap::fit_runs(gap::pointers(runs), model, sim::pooled_start(runs));
   EXPECT_NEAR(f.params[4], 0.3, 0.03 * 0.3);
   EXPECT_NEAR(f.params[5], 1.5, 0.06 * 1.5);  // 1.44; read on the encoders' slip, 1.15
-}
-
-// Speed friction past a few is a family of curves of its own: on a truck's sharp peak the fit ran
-// to its range's end (20), was refused there, and the set ended `brake_threshold, unexplained`.
-// Generator B's ground pair 41 from every export (four runs of a truck at 42-90 km/h, 1.9 with a
-// 0.12 bar threshold): refitted from inside the range both are named.
-TEST(GapPairs, SpeedFrictionOnItsRangesEndIsRefittedFromInside) {
-  const RefereePair p = every_export_ground_pair(41);
-  ASSERT_EQ(p.inj.effect, "speed_friction") << p.why;
-  EXPECT_TRUE(p.res.correct()) << p.why;
-  EXPECT_NEAR(p.res.estimate, p.res.truth.magnitude, 0.1 * p.res.truth.magnitude) << p.why;
-}
-
-// A truck's two runs at 43-78 km/h turn its wheel 1.1-1.4 times: no run reads the wheel encoder's
-// ripple (4.1e-4 of the speed, 120 N on the tyre's slope), which was left in the runs and out of
-// their floor. The rests before the brake, where the slip is flat, read it, and each run's rest
-// places its phase. Generator B's ground pair 39 from every export.
-TEST(GapPairs, AWheelsRippleNoRunTurnsEnoughToReadIsReadOnTheRests) {
-  const RefereePair p = every_export_ground_pair(39);
-  const auto note = std::find_if(p.res.notes.begin(), p.res.notes.end(), [](const std::string& n) {
-    return n.find("read on the runs' rests") != std::string::npos;
-  });
-  ASSERT_NE(note, p.res.notes.end()) << p.why;
-  EXPECT_NE(note->find("in 2 of 2 runs"), std::string::npos) << *note;
-  const std::size_t at = note->find("wheel ");
-  ASSERT_NE(at, std::string::npos) << *note;
-  EXPECT_NEAR(std::stod(note->substr(at + 6)), 4.12e-4, 0.1 * 4.12e-4) << *note;
 }

@@ -1,0 +1,47 @@
+#pragma once
+// The referee's pair trials (bench/gap_referee --pairs) drawn and diagnosed one at a time, for
+// tests that pin what a pair the referee scores is said.
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "core/gap/gap.hpp"
+#include "sim/referee.hpp"
+#include "sim/second/generator.hpp"
+
+namespace brakefit::test {
+
+/// The referee's pair trial `index` as `bench/gap_referee --pairs` draws and seeds it (seed 1),
+/// diagnosed under the condition's shipped gates (or those given).
+struct RefereePair {
+  sim::Injection inj;
+  sim::TrialResult res;
+  std::string why;  ///< its scores and notes, for a failure's message
+};
+inline RefereePair referee_pair(gap::Condition c, sim::Generator g, int index,
+                                std::optional<gap::Options> gates = std::nullopt) {
+  const auto cn = static_cast<std::uint64_t>(c);
+  Rng rng(1 + 300 * cn + 7);
+  RefereePair p;
+  for (int t = 0; t <= index; ++t) p.inj = sim::draw_pair(rng, c, g);
+  p.res = sim::run_trial(p.inj, 1000 + 700'000 + static_cast<std::uint64_t>(index) + 100'000 * cn,
+                         gates.value_or(gap::calibrated_options(c)));
+  for (const auto& s : p.res.scores) p.why += "\n  " + s;
+  for (const auto& s : p.res.notes) p.why += "\n  " + s;
+  return p;
+}
+
+/// Generator B's ground pair `index` from every export, under the referee's gates for them.
+inline RefereePair every_export_ground_pair(int index) {
+  sim::set_generator_b_stations(sim2::Stations::Every);
+  struct Restore {
+    ~Restore() { sim::set_generator_b_stations(sim2::Stations::Cars); }
+  } restore;
+  gap::Options gates = gap::calibrated_options(gap::Condition::Ground);
+  gates.gate_gain = 0.101;
+  gates.bic_margin_per_point = 0.2379;
+  gates.noise_factor = 2.13;
+  return referee_pair(gap::Condition::Ground, sim::Generator::B, index, gates);
+}
+
+}  // namespace brakefit::test
