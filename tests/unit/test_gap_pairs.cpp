@@ -17,7 +17,6 @@
 
 using namespace brakefit;
 using brakefit::test::referee_pair;
-using brakefit::test::RefereePair;
 
 TEST(GapPairs, DrawsTwoDifferentEffectsAndNeverLagWithDelay) {
   for (auto [c, g] : {std::pair{gap::Condition::Roller, sim::Generator::A},

@@ -13,17 +13,28 @@ using namespace brakefit;
 using brakefit::test::every_export_ground_pair;
 using brakefit::test::RefereePair;
 
+namespace {
+
+/// The pair drawn is (first, second) and both are named, each within its relative tolerance.
+void expect_both_named(const RefereePair& p, const char* first, const char* second, double tol,
+                       double tol2) {
+  ASSERT_EQ(p.inj.effect, first) << p.why;
+  ASSERT_EQ(p.inj.effect2, second) << p.why;
+  EXPECT_TRUE(p.res.correct()) << p.why;
+  EXPECT_NEAR(p.res.estimate, p.res.truth.magnitude, tol * std::abs(p.res.truth.magnitude))
+      << p.why;
+  EXPECT_NEAR(p.res.estimate2, p.res.truth.magnitude2, tol2 * std::abs(p.res.truth.magnitude2))
+      << p.why;
+}
+
+}  // namespace
+
 // Load transfer with speed friction, where a time offset passes the gates alone but takes 17 % of
 // the gap and would be vetoed by the fit-quality check: the pair is judged in-sample as where
 // nothing is named (left out, a run's load and its peak trade: 114 N held out, 2.6 N in-sample).
 // Generator B's ground pair 43 from every export (three runs of a car at 59-111 km/h).
 TEST(GapPairs, AFirstEffectTheFitQualityCheckVetoesLeavesALoadTransferPairInSample) {
-  const RefereePair p = every_export_ground_pair(43);
-  ASSERT_EQ(p.inj.effect, "load_transfer") << p.why;
-  ASSERT_EQ(p.inj.effect2, "speed_friction") << p.why;
-  EXPECT_TRUE(p.res.correct()) << p.why;
-  EXPECT_NEAR(p.res.estimate, p.res.truth.magnitude, 0.15 * p.res.truth.magnitude) << p.why;
-  EXPECT_NEAR(p.res.estimate2, p.res.truth.magnitude2, 0.15 * p.res.truth.magnitude2) << p.why;
+  expect_both_named(every_export_ground_pair(43), "load_transfer", "speed_friction", 0.15, 0.15);
 }
 
 // A threshold whose fitted tyre carries no force repeats the measured force (its gain is no
@@ -75,11 +86,7 @@ TEST(GapPairs, AWheelsRippleNoRunTurnsEnoughToReadIsReadOnTheRests) {
 // once the ripple is read against them. Selection run again on those runs names the pair.
 TEST(GapPairs, AGapTheRippleReadAgainstTheNamedEffectsShowsIsSearchedAgain) {
   const RefereePair p = every_export_ground_pair(50);
-  ASSERT_EQ(p.inj.effect, "wheel_inertia") << p.why;
-  ASSERT_EQ(p.inj.effect2, "speed_friction") << p.why;
-  EXPECT_TRUE(p.res.correct()) << p.why;
-  EXPECT_NEAR(p.res.estimate, p.res.truth.magnitude, 0.1 * p.res.truth.magnitude) << p.why;
-  EXPECT_NEAR(p.res.estimate2, p.res.truth.magnitude2, 0.1 * p.res.truth.magnitude2) << p.why;
+  expect_both_named(p, "wheel_inertia", "speed_friction", 0.1, 0.1);
   EXPECT_TRUE(std::any_of(p.res.notes.begin(), p.res.notes.end(), [](const std::string& n) {
     return n.find("forward selection was run again") != std::string::npos;
   })) << p.why;
@@ -90,11 +97,5 @@ TEST(GapPairs, AGapTheRippleReadAgainstTheNamedEffectsShowsIsSearchedAgain) {
 // -0.0091 slip offset, six runs) rested 83 N above the offset's fitted foot, eleven times the
 // rest's uncertainty and above a rolling wheel's drag, on a 43 N floor: both are named.
 TEST(GapPairs, AThresholdsForceAtTheWheelsRestIsJudgedAgainstTheRestsUncertainty) {
-  const RefereePair p = every_export_ground_pair(23);
-  ASSERT_EQ(p.inj.effect, "brake_threshold") << p.why;
-  ASSERT_EQ(p.inj.effect2, "slip_offset") << p.why;
-  EXPECT_TRUE(p.res.correct()) << p.why;
-  EXPECT_NEAR(p.res.estimate, p.res.truth.magnitude, 0.15 * p.res.truth.magnitude) << p.why;
-  EXPECT_NEAR(p.res.estimate2, p.res.truth.magnitude2, 0.05 * std::abs(p.res.truth.magnitude2))
-      << p.why;
+  expect_both_named(every_export_ground_pair(23), "brake_threshold", "slip_offset", 0.15, 0.05);
 }
