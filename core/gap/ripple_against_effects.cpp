@@ -74,9 +74,7 @@ void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& f
   const std::size_t n_named = named_effects(rep.accepted).size();
   if (gap_left_before || !gap_left(rep, o) || n_named > 2) return;
   const std::vector<std::string> first_verdict = rep.verdict;
-  std::vector<Run> again_runs = runs;
-  std::optional<Report> again =
-      select_again(rep, again_runs, candidates, fit, o, separability_note);
+  std::optional<Report> again = select_again(rep, runs, candidates, fit, o, separability_note);
   if (!again) return;
   std::vector<std::string> notes = std::move(rep.notes);
   notes.push_back(fmt::format(
@@ -88,7 +86,6 @@ void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& f
   for (std::string& n : again->notes) notes.push_back(std::move(n));
   again->notes = std::move(notes);
   rep = std::move(*again);
-  runs = std::move(again_runs);
 }
 
 }  // namespace brakefit::gap
