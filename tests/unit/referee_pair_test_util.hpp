@@ -31,17 +31,39 @@ inline RefereePair referee_pair(gap::Condition c, sim::Generator g, int index,
   return p;
 }
 
-/// Generator B's ground pair `index` from every export, under the referee's gates for them.
-inline RefereePair every_export_ground_pair(int index) {
-  sim::set_generator_b_stations(sim2::Stations::Every);
-  struct Restore {
-    ~Restore() { sim::set_generator_b_stations(sim2::Stations::Cars); }
-  } restore;
+/// The gates the referee calibrates for generator B's ground sets from every export.
+inline gap::Options every_export_ground_gates() {
   gap::Options gates = gap::calibrated_options(gap::Condition::Ground);
   gates.gate_gain = 0.101;
   gates.bic_margin_per_point = 0.2379;
-  gates.noise_factor = 2.13;
-  return referee_pair(gap::Condition::Ground, sim::Generator::B, index, gates);
+  return gates;
+}
+
+/// Draws from every export while it lives (generator B's stations are a process-wide setting).
+struct EveryExport {
+  EveryExport() { sim::set_generator_b_stations(sim2::Stations::Every); }
+  ~EveryExport() { sim::set_generator_b_stations(sim2::Stations::Cars); }
+  EveryExport(const EveryExport&) = delete;
+  EveryExport& operator=(const EveryExport&) = delete;
+};
+
+/// Generator B's ground pair `index` from every export, under the referee's gates for them.
+inline RefereePair every_export_ground_pair(int index) {
+  const EveryExport every;
+  return referee_pair(gap::Condition::Ground, sim::Generator::B, index,
+                      every_export_ground_gates());
+}
+
+/// Generator B's misspecified ground set `index` from every export (a brush-model tyre, no
+/// effect), as `bench/gap_referee --misspecified` draws and seeds it.
+inline sim::TrialResult every_export_misspecified_ground(int index) {
+  const EveryExport every;
+  sim::Injection inj;
+  inj.effect = "misspecified";
+  inj.condition = gap::Condition::Ground;
+  inj.generator = sim::Generator::B;
+  return sim::run_trial(inj, 500'000 + static_cast<std::uint64_t>(index),
+                        every_export_ground_gates());
 }
 
 }  // namespace brakefit::test
