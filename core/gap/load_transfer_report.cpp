@@ -44,44 +44,24 @@ void pitch_note(Report& rep, EffectScore& e) {
 /// Load transfer, once named, is measured with the stiffness ratio held at the published tyres'
 /// (Effect::LoadTransferMeasured): its score's magnitude is that fit's q; the free fit's q stays
 /// beside it (dfz_per_decel_free_ratio_s2_per_m). Its free ratio has decided the naming (inside
-/// its range) and its fit stays the model's: a note says both. A pair named with the ratio held
-/// (its free ratio ended on its bound: pair_search) is that measure already.
+/// its range) and its fit stays the model's: a note says both.
 void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
                            const Options& o) {
   std::vector<Effect> model = rep.accepted;
   const auto lt = std::find(model.begin(), model.end(), Effect::LoadTransfer);
-  const bool held = lt == model.end();
-  if (held && std::find(model.begin(), model.end(), Effect::LoadTransferMeasured) == model.end())
-    return;
-  double q_held = NAN;
-  if (!held) {
-    *lt = Effect::LoadTransferMeasured;
-    q_held = fit(pointers(runs), model).params.at(*param_offset(model, *lt));
-  }
+  if (lt == model.end()) return;
+  *lt = Effect::LoadTransferMeasured;
+  const double q = fit(pointers(runs), model).params.at(*param_offset(model, *lt));
   std::vector<double> loads;
   for (const Run& r : runs)
     if (r.wheel_load_n > 0) loads.push_back(r.wheel_load_n);
   std::sort(loads.begin(), loads.end());
   const double fz_n = loads.empty() ? 0.0 : loads[loads.size() / 2];
   for (auto& e : rep.effects) {
-    if (!e.accepted || e.params.empty()) continue;
-    const bool free_named = e.effect == Effect::LoadTransfer && e.params.size() >= 2 && !held;
-    if (!free_named && e.effect != Effect::LoadTransferMeasured) continue;
-    const double q = free_named ? q_held : e.params[0].second;
-    std::string how;
-    if (free_named) {
-      const double q_free = e.params[0].second, ratio = e.params[1].second;
-      e.params[0].second = q;
-      e.params.emplace_back("dfz_per_decel_free_ratio_s2_per_m", q_free);
-      how = fmt::format(
-          "the runs end just past the peak and fix the stiffness's load sensitivity (q x ratio) "
-          "better than q; the free fit says {:.4g} at a ratio of {:.2f}",
-          q_free, ratio);
-    } else {
-      how =
-          "fitted with its partner at that ratio: free, the ratio ended on its bound (the runs "
-          "fix q x ratio, not the ratio)";
-    }
+    if (e.effect != Effect::LoadTransfer || !e.accepted || e.params.size() < 2) continue;
+    const double q_free = e.params[0].second, ratio = e.params[1].second;
+    e.params[0].second = q;
+    e.params.emplace_back("dfz_per_decel_free_ratio_s2_per_m", q_free);
     const double load_per_decel = q / kPublishedPeakLoadExponent;
     e.params.emplace_back("load_ratio_per_decel_s2_per_m", load_per_decel);
     std::string h_over_l;
@@ -95,10 +75,12 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
     }
     rep.notes.push_back(fmt::format(
         "load_transfer's magnitude, {:.4g} per m/s^2, is measured with the slip stiffness's load "
-        "ratio held at published MF 6.1 tyres' ({:.2f}; 1.15-1.33): {}. The wheel's load changes "
-        "by {:.4g} of itself per m/s^2 (dFz/Fz: the peak's change over published tyres' d ln D / "
-        "d ln Fz, {:.2f}; 0.87-0.97){}",
-        q, kPublishedKxLoadRatio, how, load_per_decel, kPublishedPeakLoadExponent, h_over_l));
+        "ratio held at published MF 6.1 tyres' ({:.2f}; 1.15-1.33): the runs end just past the "
+        "peak and fix the stiffness's load sensitivity (q x ratio) better than q; the free fit "
+        "says {:.4g} at a ratio of {:.2f}. The wheel's load changes by {:.4g} of itself per m/s^2 "
+        "(dFz/Fz: the peak's change over published tyres' d ln D / d ln Fz, {:.2f}; 0.87-0.97){}",
+        q, kPublishedKxLoadRatio, q_free, ratio, load_per_decel, kPublishedPeakLoadExponent,
+        h_over_l));
     pitch_note(rep, e);
   }
 }

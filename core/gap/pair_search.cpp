@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <optional>
 #include <set>
 
 #include "core/gap/gap.hpp"
@@ -26,21 +25,6 @@ bool lag_and_delay(Effect a, Effect b) {
 
 bool inside(const std::vector<Effect>& model, Effect e, const Fit& f) {
   return param_offset(model, e) && !param_at_bound(model, e, f);
-}
-
-/// A pair whose load transfer ends with only its slip stiffness's load ratio on the ratio's
-/// bound, its partner inside. Short runs that end just past the peak fix q x ratio, not the
-/// ratio: three 50 Hz runs of a heavy wheel under load transfer take the ratio to its bound at a
-/// quarter of the load and miss a run held out by 64 N; held at published tyres' ratio
-/// (Effect::LoadTransferMeasured), the pair leaves 31 N held out and both members come within
-/// 21 %. A curve that is not a Magic Formula is reshaped alike at either ratio (a brush tyre's
-/// pair leaves 7.6 N held out on a 4.8 N floor, a speed friction's on two runs 18.7 N on 7.6):
-/// with a parameter held, the pair must leave no more than the noise floor held out and beat the
-/// free pair by the gain gate; it is then judged as any other.
-bool ratio_on_bound(const std::vector<Effect>& model, Effect a, Effect b, const Fit& f) {
-  const Effect lt = a == Effect::LoadTransfer ? a : b;
-  return lt == Effect::LoadTransfer && inside(model, lt == a ? b : a, f) &&
-         param_at_bound(model, lt, f) == std::optional<std::size_t>(1);
 }
 
 /// Puts the member that contributes more first (the verdict's order is the model's), then
@@ -96,18 +80,9 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
   for (auto i = pool.begin(); i != pool.end(); ++i)
     for (auto k = std::next(i); k != pool.end(); ++k)
       if (!lag_and_delay(*i, *k)) pairs.emplace_back(*i, *k);
-  std::optional<double> held_ratio_alone_n;  // load transfer alone at the published ratio
-  auto alone_n = [&](Effect e) {             // the effect's held-out error alone (round 1)
+  auto alone_n = [&](Effect e) {  // the effect's held-out error alone (round 1)
     for (const auto* s : scored)
       if (s->effect == e) return s->heldout_rmse_after_n;
-    if (e == Effect::LoadTransferMeasured) {
-      if (!held_ratio_alone_n) {
-        std::vector<Effect> model = base;
-        model.push_back(e);
-        held_ratio_alone_n = heldout(runs, model, fit);
-      }
-      return *held_ratio_alone_n;
-    }
     return gap_before_n;
   };
   std::map<Effect, double> alone_in_sample;  // each load-transfer pair member's fit alone
@@ -120,25 +95,15 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
     return alone_in_sample[e];
   };
   std::vector<PairFound> found, found_in_sample;
-  for (auto [a, b] : pairs) {
+  for (const auto& [a, b] : pairs) {
     std::vector<Effect> model = base;
     model.push_back(a);
     model.push_back(b);
     Fit f = fit(pointers(runs), model);
-    std::optional<double> held_n;  // the pair's held-out error at the published ratio
-    if (!inside(model, a, f) || !inside(model, b, f)) {
-      if (!ratio_on_bound(model, a, b, f)) continue;
-      const double free_n = heldout(runs, model, fit);
-      std::replace(model.begin(), model.end(), Effect::LoadTransfer, Effect::LoadTransferMeasured);
-      (a == Effect::LoadTransfer ? a : b) = Effect::LoadTransferMeasured;
-      f = fit(pointers(runs), model);
-      if (!inside(model, a, f) || !inside(model, b, f)) continue;
-      held_n = heldout(runs, model, fit);
-      if (*held_n > noise_n || *held_n > (1.0 - o.gate_gain) * free_n) continue;
-    }
+    if (!inside(model, a, f) || !inside(model, b, f)) continue;
     PairFound p;
     p.model = model;
-    p.heldout_n = held_n ? *held_n : heldout(runs, model, fit);
+    p.heldout_n = heldout(runs, model, fit);
     p.gain = 1.0 - p.heldout_n / std::max(gap_before_n, 1e-12);
     p.delta_bic = f.bic() - base_fit.bic();
     // Each member's place: the pair against the other member alone.
