@@ -11,6 +11,14 @@
 
 namespace brakefit::test {
 
+/// A trial's scores and notes, one per line, for a failure's message.
+inline std::string why_of(const sim::TrialResult& r) {
+  std::string why;
+  for (const auto& s : r.scores) why += "\n  " + s;
+  for (const auto& s : r.notes) why += "\n  " + s;
+  return why;
+}
+
 /// The referee's pair trial `index` as `bench/gap_referee --pairs` draws and seeds it (seed 1),
 /// diagnosed under the condition's shipped gates (or those given).
 struct RefereePair {
@@ -26,8 +34,7 @@ inline RefereePair referee_pair(gap::Condition c, sim::Generator g, int index,
   for (int t = 0; t <= index; ++t) p.inj = sim::draw_pair(rng, c, g);
   p.res = sim::run_trial(p.inj, 1000 + 700'000 + static_cast<std::uint64_t>(index) + 100'000 * cn,
                          gates.value_or(gap::calibrated_options(c)));
-  for (const auto& s : p.res.scores) p.why += "\n  " + s;
-  for (const auto& s : p.res.notes) p.why += "\n  " + s;
+  p.why = why_of(p.res);
   return p;
 }
 

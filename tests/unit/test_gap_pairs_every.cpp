@@ -107,8 +107,7 @@ TEST(GapPairs, AThresholdsForceAtTheWheelsRestIsJudgedAgainstTheRestsUncertainty
 // pair on short runs does (31 N on 39). A ratio on its bound names nothing.
 TEST(GapPairs, ABrushTyresLoadTransferWithItsRatioOnItsBoundIsNotNamed) {
   const sim::TrialResult r = brakefit::test::every_export_misspecified_ground(0);
-  std::string why;
-  for (const auto& n : r.notes) why += "\n  " + n;
+  const std::string why = brakefit::test::why_of(r);
   EXPECT_TRUE(r.correct()) << why;
   EXPECT_TRUE(std::any_of(r.notes.begin(), r.notes.end(), [](const std::string& n) {
     return n.find("kx_load_ratio at the end of its physical range") != std::string::npos;
