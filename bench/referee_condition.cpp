@@ -284,7 +284,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
           inj.effect = "misspecified";
           inj.condition = c;
           inj.generator = trial_gen;
-          return sim::run_trial(inj, 500'000 + static_cast<std::uint64_t>(t), gates.options);
+          return sim::run_trial(inj, sim::misspecified_seed(static_cast<std::uint64_t>(t)),
+                                gates.options);
         },
         "misspecified");
     int ok = 0;

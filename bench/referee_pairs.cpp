@@ -18,7 +18,7 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
                                  const std::string& cname) {
   nlohmann::ordered_json j;
   // Their own draws (the single-effect trials' draws and seeds stay as they were).
-  Rng rng(st.seed0 + 300 * static_cast<std::uint64_t>(c) + 7);
+  Rng rng(sim::pair_draw_seed(st.seed0, c));
   std::vector<sim::Injection> draws;
   std::vector<int> kept;
   const auto wanted = [&](const std::string& e) {
@@ -36,9 +36,7 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
       n, st.threads,
       [&](int k) {
         const auto t = static_cast<std::uint64_t>(kept[static_cast<std::size_t>(k)]);
-        return sim::run_trial(
-            draws[t], st.seed0 * 1000 + 700'000 + t + 100'000 * static_cast<std::uint64_t>(c),
-            gates);
+        return sim::run_trial(draws[t], sim::pair_trial_seed(st.seed0, t, c), gates);
       },
       cname + " pairs");
   int both = 0, exact = 0, refused = 0;

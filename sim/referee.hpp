@@ -122,6 +122,18 @@ struct TrialResult {
 using OutsideRuns = std::function<std::vector<gap::Run>(Injection&, std::uint64_t seed)>;
 void set_outside_runs(OutsideRuns f);
 
+/// The seeds bench/gap_referee gives its pair draws, its pair trials and its misspecified sets,
+/// here so that a test reruns one of them as the referee ran it.
+inline std::uint64_t pair_draw_seed(std::uint64_t seed0, gap::Condition c) {
+  return seed0 + 300 * static_cast<std::uint64_t>(c) + 7;
+}
+inline std::uint64_t pair_trial_seed(std::uint64_t seed0, std::uint64_t index, gap::Condition c) {
+  return seed0 * 1000 + 700'000 + index + 100'000 * static_cast<std::uint64_t>(c);
+}
+inline std::uint64_t misspecified_seed(std::uint64_t index) {
+  return 500'000 + index;
+}
+
 /// Simulates the injection in its condition (from referee_null), diagnoses blind, scores.
 TrialResult run_trial(const Injection& inj, std::uint64_t seed, const gap::Options& o);
 /// The same from a given base (model vs measurement conditions only).

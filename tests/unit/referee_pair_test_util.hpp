@@ -28,11 +28,10 @@ struct RefereePair {
 };
 inline RefereePair referee_pair(gap::Condition c, sim::Generator g, int index,
                                 std::optional<gap::Options> gates = std::nullopt) {
-  const auto cn = static_cast<std::uint64_t>(c);
-  Rng rng(1 + 300 * cn + 7);
+  Rng rng(sim::pair_draw_seed(1, c));
   RefereePair p;
   for (int t = 0; t <= index; ++t) p.inj = sim::draw_pair(rng, c, g);
-  p.res = sim::run_trial(p.inj, 1000 + 700'000 + static_cast<std::uint64_t>(index) + 100'000 * cn,
+  p.res = sim::run_trial(p.inj, sim::pair_trial_seed(1, static_cast<std::uint64_t>(index), c),
                          gates.value_or(gap::calibrated_options(c)));
   p.why = why_of(p.res);
   return p;
@@ -69,7 +68,7 @@ inline sim::TrialResult every_export_misspecified_ground(int index) {
   inj.effect = "misspecified";
   inj.condition = gap::Condition::Ground;
   inj.generator = sim::Generator::B;
-  return sim::run_trial(inj, 500'000 + static_cast<std::uint64_t>(index),
+  return sim::run_trial(inj, sim::misspecified_seed(static_cast<std::uint64_t>(index)),
                         every_export_ground_gates());
 }
 

@@ -102,9 +102,9 @@ TEST(GapPairs, AThresholdsForceAtTheWheelsRestIsJudgedAgainstTheRestsUncertainty
 
 // A brush-model tyre (no Magic Formula) is reshaped by load transfer. Generator B's misspecified
 // ground set 0 from every export (six runs) fits it only with the slip stiffness's load ratio on
-// its bound, alone and beside a threshold; with the ratio held at published tyres' that pair
-// takes 57 % of the gap and leaves 7.6 N held out on a 4.8 N floor, as a true load transfer's
-// pair on short runs does (31 N on 39). A ratio on its bound names nothing.
+// its bound, alone and beside a threshold. Held at published tyres' ratio such a pair fits a
+// brush tyre as closely as a true load transfer on short runs (which fix q x ratio, not the
+// ratio): a ratio on its bound names nothing.
 TEST(GapPairs, ABrushTyresLoadTransferWithItsRatioOnItsBoundIsNotNamed) {
   const sim::TrialResult r = brakefit::test::every_export_misspecified_ground(0);
   const std::string why = brakefit::test::why_of(r);
