@@ -3,7 +3,7 @@
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
 //               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1]
 //               [--only EFFECT,...] [--pick I,...] [--why 1|2] [--pairs N] [--detection SETS]
-//               [--results FILE [--results-key K]] [--export-hz HZ]
+//               [--results FILE [--results-key K]] [--export-hz HZ] [--outside N]
 // Three generators make the runs: A, the project's simulator (candump logs), B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export), and C, a physics written outside the project (--gen-c, by default
@@ -67,6 +67,8 @@ int run(int argc, char** argv) {
           << "usage: gap_referee [--condition roller|ground|roller_vs_road|all] [--trials N]\n"
              "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
              "  [--pairs N]           (pair trials per row: two effects at once, A and B)\n"
+             "  [--outside N]         (generator B's sets with an effect outside the\n"
+             "                         catalogue: a pressure transducer's bow, fading friction)\n"
              "  [--seed S] [--threads N] [--generators A,B,C] [--gen-c SCRIPT] [--crossed 1|0]\n"
              "  [--trials-from C]      (only these generators' trials; gates from all)\n"
              "  [--stations cars|every] (generator B's sets: cars at 5 km/h and 30-70 km/h, or\n"
@@ -96,6 +98,8 @@ int run(int argc, char** argv) {
       st.pairs = std::atoi(v);
     else if (k == "--misspecified")
       st.misspecified = std::atoi(v);
+    else if (k == "--outside")
+      st.outside = std::atoi(v);
     else if (k == "--null-share")
       st.null_share = std::atof(v);
     else if (k == "--seed")

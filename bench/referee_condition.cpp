@@ -19,6 +19,7 @@
 
 #include "bench/outside_generator.hpp"
 #include "bench/referee_detection.hpp"
+#include "bench/referee_outside.hpp"
 #include "bench/referee_pairs.hpp"
 #include "bench/referee_results.hpp"
 #include "bench/referee_util.hpp"
@@ -314,6 +315,9 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     for (const auto& [k, v] : said) std::cout << fmt::format(" {} {}", k, v);
     std::cout << "\n";
   }
+  if (st.outside > 0)
+    j.update(run_outside(c, trial_gen, gates.options, {st.outside, st.threads, st.why}, cname),
+             /*merge_objects=*/true);
   if (st.pairs > 0 && trial_gen != sim::Generator::C && c != gap::Condition::RollerToRoad)
     j.update(run_pairs(c, trial_gen, gates.options,
                        {st.pairs, st.seed, st.threads, st.why, st.only, st.pick}, cname),

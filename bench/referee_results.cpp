@@ -135,6 +135,27 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
           "magnitude their runs could show beside the effects named (the report's reach):\n\n" +
           lines;
   }
+  if (std::any_of(rows.begin(), rows.end(),
+                  [](const auto& r) { return r["counts"].contains("outside"); })) {
+    out +=
+        "\nOutside the catalogue (generator B's sets with an effect the diagnosis has no name "
+        "for: `none` or `unexplained` is right, a name is a false claim):\n\n| condition | "
+        "trials | gates | none/unexplained | each effect | named instead |\n|---|---|---|---|---|"
+        "---|\n";
+    for (const auto& r : rows) {
+      const auto& c = r["counts"];
+      if (!c.contains("outside")) continue;
+      std::string each, claimed;
+      for (const auto& [e, v] : r["outside_effects"].items())
+        each += fmt::format("{}{} {}/{}", each.empty() ? "" : "; ", e,
+                            v["none_or_unexplained"].get<int>(), v["drawn"].get<int>());
+      for (const auto& [e, n] : r["outside_claimed"].items())
+        claimed += fmt::format("{}{} {}", claimed.empty() ? "" : ", ", e, n.get<int>());
+      out += row_name(r) +
+             fmt::format("| {} ({} `unexplained`) | {} | {} |\n", share(c, "outside_ok", "outside"),
+                         c.value("outside_unexplained", 0), each, claimed.empty() ? "–" : claimed);
+    }
+  }
   bool detection = false;
   for (const auto& r : rows) detection |= r.contains("detection");
   if (detection) {

@@ -80,6 +80,10 @@ MfParams pooled_start(const std::vector<gap::Run>& runs) {
   return run_method(Method::Lm, nullptr, pooled).params;
 }
 
+bool outside_catalogue(const std::string& effect) {
+  return effect == "misspecified" || effect == "pressure_bow" || effect == "friction_fade";
+}
+
 bool TrialResult::exact() const {
   if (verdict.empty()) return false;
   if (truth.effect == "none") return verdict == std::vector<std::string>{"none"};
@@ -110,7 +114,7 @@ bool names_no_effect(const std::vector<std::string>& verdict) {
 
 bool TrialResult::correct() const {
   if (exact()) return true;
-  if (truth.effect == "misspecified")  // never an invented effect
+  if (outside_catalogue(truth.effect))  // never an invented effect
     return names_no_effect(verdict);
   if (verdict.empty() || truth.effect == "none") return false;
   // The name v stands for the effect e: its own, the other lag at one speed, or noted inseparable.

@@ -31,7 +31,7 @@ enum class Generator { A, B, C };
 const char* to_string(Generator g);
 
 struct Injection {
-  std::string effect = "none";  ///< gap effect name, "none" or "misspecified"
+  std::string effect = "none";  ///< gap effect name, "none" or outside_catalogue's
   double magnitude = 0.0;       ///< in the diagnosis parameter's unit (sigma_m, p0_bar, ...)
   gap::Condition condition = gap::Condition::Roller;
   Generator generator = Generator::A;  ///< B: roller and ground conditions only
@@ -133,6 +133,20 @@ inline std::uint64_t pair_trial_seed(std::uint64_t seed0, std::uint64_t index, g
 inline std::uint64_t misspecified_seed(std::uint64_t index) {
   return 500'000 + index;
 }
+/// The seeds of the sets whose effect is outside the catalogue (disjoint from the others).
+inline std::uint64_t outside_seed(std::uint64_t index) {
+  return 600'000 + index;
+}
+
+/// No catalogue name is right for the set: a tyre that is not a Magic Formula ("misspecified")
+/// or generator B's effects outside the catalogue ("pressure_bow", a pressure transducer's bow;
+/// "friction_fade", friction fading with the energy slid). Correct: `none` or `unexplained`.
+bool outside_catalogue(const std::string& effect);
+/// The index-th set of generator B outside the catalogue, alternately a pressure transducer's bow
+/// (0.5-3 % of full scale at mid-range, either sign: at a run's 45-75 bar peak a force read
+/// 1.5-9 % off, zero and full scale true) and friction fading with the energy slid
+/// (0.2-1.5 per m of energy slid per unit load: the peak 1-22 % low, most on slow ramps).
+Injection draw_outside(std::uint64_t index, gap::Condition c);
 
 /// Simulates the injection in its condition (from referee_null), diagnoses blind, scores.
 TrialResult run_trial(const Injection& inj, std::uint64_t seed, const gap::Options& o);

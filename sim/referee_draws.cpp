@@ -175,6 +175,21 @@ Injection draw_pair(Rng& rng, gap::Condition c, Generator g) {
   return inj;
 }
 
+Injection draw_outside(std::uint64_t index, gap::Condition c) {
+  Injection inj;
+  inj.condition = c;
+  inj.generator = Generator::B;
+  Rng rng(outside_seed(index) * 7 + 3);
+  if (index % 2 == 0) {
+    inj.effect = "pressure_bow";
+    inj.magnitude = rng.uniform(0.005, 0.03) * (rng.uniform() < 0.5 ? -1 : 1);
+  } else {
+    inj.effect = "friction_fade";
+    inj.magnitude = rng.uniform(0.2, 1.5);
+  }
+  return inj;
+}
+
 namespace {
 
 void inject_one(Scenario& s, const std::string& effect, double magnitude) {

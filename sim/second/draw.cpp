@@ -71,15 +71,17 @@ void check_effect(const std::string& effect, double magnitude) {
     double lo, hi;  // the magnitude's range, open at lo where lo_open
     bool lo_open;
   };
-  static constexpr std::array<Law, 9> laws = {{{"none", -INFINITY, INFINITY, false},
-                                               {"misspecified", -INFINITY, INFINITY, false},
-                                               {"load_transfer", -INFINITY, INFINITY, false},
-                                               {"relaxation_length", 0.0, 10.0, false},
-                                               {"wheel_inertia", 0.0, 200.0, true},
-                                               {"brake_threshold", 0.0, 100.0, false},
-                                               {"time_offset", -1.0, 1.0, false},
-                                               {"slip_offset", -0.5, 0.5, false},
-                                               {"speed_friction", 0.0, 100.0, false}}};
+  static constexpr std::array<Law, 11> laws = {{{"none", -INFINITY, INFINITY, false},
+                                                {"misspecified", -INFINITY, INFINITY, false},
+                                                {"load_transfer", -INFINITY, INFINITY, false},
+                                                {"relaxation_length", 0.0, 10.0, false},
+                                                {"wheel_inertia", 0.0, 200.0, true},
+                                                {"brake_threshold", 0.0, 100.0, false},
+                                                {"time_offset", -1.0, 1.0, false},
+                                                {"slip_offset", -0.5, 0.5, false},
+                                                {"speed_friction", 0.0, 100.0, false},
+                                                {"pressure_bow", -0.2, 0.2, false},
+                                                {"friction_fade", 0.0, 100.0, false}}};
   const auto l =
       std::find_if(laws.begin(), laws.end(), [&](const Law& law) { return effect == law.name; });
   if (l == laws.end()) {
@@ -182,6 +184,8 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
     if (effect == "time_offset") base.time_offset_s = magnitude;
     if (effect == "slip_offset") base.radius_error_ratio = -magnitude;
     if (effect == "speed_friction") base.lmuv = magnitude;
+    if (effect == "pressure_bow") tx.pressure_bow_ratio = magnitude;
+    if (effect == "friction_fade") base.fade_per_m = magnitude;
     if (effect == "load_transfer") {
       // dFz / Fz per m/s^2 = m h / (2 L Fz0) = h/L / (front share g); D follows through MF 6.1.
       base.load_per_decel = h_over_l / (front_share * kG);

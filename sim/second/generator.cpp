@@ -24,6 +24,7 @@ struct Dynamics {
   double v_roller_mps = 0;     ///< roller surface speed (roller bench)
   double decel_mps2 = 0;       ///< the deceleration the load follows (behind the body's pitch)
   double decel_rate_mps3 = 0;  ///< its rate, the pitch mode's second state
+  double slid_m = 0;           ///< energy slid per unit load so far (friction_fade)
 
   double line_pressure_bar(double t_s) const {
     const double t0 = c.tester.leading_s;
@@ -34,13 +35,15 @@ struct Dynamics {
     return c.bench == can::BenchKind::Roller ? v_roller_mps : y[1];
   }
   double tyre_force_n(double kappa, double v_mps) const {
-    if (c.brush) return brush_braking_force_n(c.brush_tyre, kappa, fz_n(), v_mps);
+    // Held over an integration step: the fade moves with the energy slid, far slower.
+    const double fade = c.fade_per_m > 0 ? 1.0 / (1.0 + c.fade_per_m * slid_m) : 1.0;
+    if (c.brush) return fade * brush_braking_force_n(c.brush_tyre, kappa, fz_n(), v_mps);
     Contact k;
     k.fz_n = fz_n();
     k.pressure_pa = c.pressure_pa;
     k.slip_speed_mps = std::abs(kappa) * v_mps;
     k.lmuv = c.lmuv;
-    return mf61_braking_force_n(c.tyre, kappa, k);
+    return fade * mf61_braking_force_n(c.tyre, kappa, k);
   }
   double slip(const State& y) const {
     const double v = ref_speed(y);
@@ -148,6 +151,10 @@ std::string simulate_event_csv(const RunCase& c) {
         const double v_target = v0 * (1.0 - c.roller_droop_ratio * f / c.roller_droop_ref_n);
         dyn.v_roller_mps += (v_target - dyn.v_roller_mps) * h / (c.roller_droop_tau_s + h);
       }
+      if (c.fade_per_m > 0) {
+        const double kc = dyn.contact_slip(y);
+        dyn.slid_m += std::abs(dyn.tyre_force_n(kc, v_ref) * kc * v_ref) / c.fz_n * h;
+      }
       if (c.bench == can::BenchKind::Ground) {
         // The load follows the body's pitch: the deceleration through a first-order lag, or a
         // damped pitch mode (semi-implicit Euler: at a step of 0.1 ms and 1.5 Hz, h w = 1e-3).
@@ -177,8 +184,11 @@ std::string simulate_event_csv(const RunCase& c) {
     const double v_wheel =
         quantise(v_wheel_true * (1 + tx.eccentricity_wheel * std::sin(angle_wheel + phase_wheel)),
                  tx.speed_step_mps);
-    const double p_meas = std::max(
-        0.0, quantise(p_filtered + tx.pressure_noise_bar * rng.normal(), tx.pressure_step_bar));
+    const double p_fs = c.max_pressure_bar, p_read = std::clamp(p_filtered / p_fs, 0.0, 1.0);
+    const double bow_bar = 4 * tx.pressure_bow_ratio * p_fs * p_read * (1 - p_read);
+    const double p_meas =
+        std::max(0.0, quantise(p_filtered + bow_bar + tx.pressure_noise_bar * rng.normal(),
+                               tx.pressure_step_bar));
     // The stamp: jittered, on the tester's clock.
     const double stamp = quantise(std::max(0.0, t + tx.jitter_ratio * dt_sample * rng.normal()),
                                   tx.stamp_resolution_s);

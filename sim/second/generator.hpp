@@ -29,6 +29,10 @@ struct TesterExport {
   double slip_filter_s = 0.05;  ///< the tester's own slip filter for its switch-off
   double switch_off_slip = 0.27, lock_slip = 0.94;
   double leading_s = 0.3;  ///< rolling before the pedal
+  /// The pressure transducer's non-linearity (outside the gap catalogue): a bow through zero and
+  /// full scale (the run's max_pressure_bar), its largest deviation, at mid-range, this fraction
+  /// of full scale: p + 4 a p_fs (p / p_fs) (1 - p / p_fs). 0: a linear transducer.
+  double pressure_bow_ratio = 0;
 };
 
 /// One brake run of generator B.
@@ -42,6 +46,10 @@ struct RunCase {
   double radius_m = 0.3, inertia_kgm2 = 0.2, brake_gain_nm_per_bar = 20, threshold_bar = 0;
   // effects
   double relaxation_m = 0, time_offset_s = 0, radius_error_ratio = 0, lmuv = 0;
+  /// Friction fading with the energy slid (outside the gap catalogue): the tyre's force scaled by
+  /// 1 / (1 + fade d), d the energy slid per unit of load over the run, the integral of
+  /// F v_slip / Fz dt (m; a tread heating as it slides). 0: no fade.
+  double fade_per_m = 0;
   // the vehicle (ground)
   double mass_kg = 1500, load_per_decel = 0;  ///< relative load change per m/s^2 (0: none)
   /// The body's pitch: the load follows the deceleration through a first-order lag of
@@ -75,7 +83,9 @@ const std::vector<Mf61Longitudinal>& heavy_tyre_library();
 enum class Stations { Cars, Every };
 
 /// A set of three runs of one tyre, vehicle and effect, as the referee draws it. effect: a gap
-/// effect name, "none" or "misspecified"; magnitude in the diagnosis parameter's unit (for
+/// effect name, "none", "misspecified" or one outside the catalogue ("pressure_bow": the
+/// transducer's bow as a fraction of full scale; "friction_fade": the fade per m of energy slid
+/// per unit load); magnitude in the diagnosis parameter's unit (for
 /// load_transfer it is overwritten with the D scale per m/s^2 of the drawn vehicle and tyre).
 struct SetDraw {
   std::vector<RunCase> runs;
