@@ -67,7 +67,7 @@ int run(int argc, char** argv) {
           << "usage: gap_referee [--condition roller|ground|roller_vs_road|all] [--trials N]\n"
              "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
              "  [--pairs N]           (pair trials per row: two effects at once, A and B)\n"
-             "  [--outside N]         (generator B's sets with an effect outside the\n"
+             "  [--outside N]         (A's and B's sets with an effect outside the\n"
              "                         catalogue: a pressure transducer's bow, fading friction)\n"
              "  [--seed S] [--threads N] [--generators A,B,C] [--gen-c SCRIPT] [--crossed 1|0]\n"
              "  [--trials-from C]      (only these generators' trials; gates from all)\n"

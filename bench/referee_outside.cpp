@@ -16,18 +16,16 @@ nlohmann::ordered_json run_outside(gap::Condition c, sim::Generator trial_gen,
                                    const std::string& cname) {
   nlohmann::ordered_json j;
   if (st.n <= 0) return j;
-  if (trial_gen != sim::Generator::B || c == gap::Condition::RollerToRoad) {
+  if (trial_gen == sim::Generator::C || c == gap::Condition::RollerToRoad) {
     std::cerr << fmt::format(
-        "[{}] sets outside the catalogue: generator B's roller and ground "
-        "only\n",
-        cname);
+        "[{}] sets outside the catalogue: generators A and B, roller and ground only\n", cname);
     return j;
   }
   const auto results = parallel_map<sim::TrialResult>(
       st.n, st.threads,
       [&](int t) {
         const auto i = static_cast<std::uint64_t>(t);
-        return sim::run_trial(sim::draw_outside(i, c), sim::outside_seed(i), gates);
+        return sim::run_trial(sim::draw_outside(i, c, trial_gen), sim::outside_seed(i), gates);
       },
       cname + " outside the catalogue");
   int ok = 0;
@@ -41,19 +39,18 @@ nlohmann::ordered_json run_outside(gap::Condition c, sim::Generator trial_gen,
     auto& [drawn, none] = by_effect[r.truth.effect];
     ++drawn;
     none += right;
-    if (right) unexplained += r.verdict.front() == "unexplained";
-    if (st.why > 1 || (right && r.verdict.front() == "unexplained"))
+    const bool said_unexplained = right && r.verdict.front() == "unexplained";
+    unexplained += said_unexplained;
+    // Every false claim; an `unexplained` too (the gap the effect left), and with --why 2 all.
+    if (!right || said_unexplained || st.why > 1)
       std::cerr << fmt::format(
-          "[{}] outside {} ({} {:.4g}; {}) said {}, gap before / floor {:.2f}, "
+          "[{}] outside {} ({} {:.4g}{}) said {}, gap before / floor {:.2f}, "
           "after {:.2f}\n",
-          cname, k, r.truth.effect, r.truth.magnitude, r.truth.station, fmt::join(r.verdict, ", "),
+          cname, k, r.truth.effect, r.truth.magnitude,
+          r.truth.station.empty() ? "" : "; " + r.truth.station, fmt::join(r.verdict, ", "),
           r.gap_before_n / std::max(r.noise_n, 1e-9), r.gap_after_n / std::max(r.noise_n, 1e-9));
     if (right) continue;
     ++claimed[r.verdict.empty() ? "?" : r.verdict.front()];
-    std::cerr << fmt::format(
-        "[{}] outside {} ({} {:.4g}; {}) said {} (gap before / floor {:.2f})\n", cname, k,
-        r.truth.effect, r.truth.magnitude, r.truth.station, fmt::join(r.verdict, ", "),
-        r.gap_before_n / std::max(r.noise_n, 1e-9));
     if (st.why)
       for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
   }

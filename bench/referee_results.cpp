@@ -138,8 +138,8 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
   if (std::any_of(rows.begin(), rows.end(),
                   [](const auto& r) { return r["counts"].contains("outside"); })) {
     out +=
-        "\nOutside the catalogue (generator B's sets with an effect the diagnosis has no name "
-        "for: `none` or `unexplained` is right, a name is a false claim):\n\n| condition | "
+        "\nOutside the catalogue (generator A's and B's sets with an effect the diagnosis has no "
+        "name for: `none` or `unexplained` is right, a name is a false claim):\n\n| condition | "
         "trials | gates | none/unexplained | each effect | named instead |\n|---|---|---|---|---|"
         "---|\n";
     for (const auto& r : rows) {

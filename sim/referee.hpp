@@ -139,14 +139,15 @@ inline std::uint64_t outside_seed(std::uint64_t index) {
 }
 
 /// No catalogue name is right for the set: a tyre that is not a Magic Formula ("misspecified")
-/// or generator B's effects outside the catalogue ("pressure_bow", a pressure transducer's bow;
-/// "friction_fade", friction fading with the energy slid). Correct: `none` or `unexplained`.
+/// or the effects outside the catalogue generators A and B inject ("pressure_bow", a pressure
+/// transducer's bow; "friction_fade", friction fading with the energy slid). Correct: `none` or
+/// `unexplained`.
 bool outside_catalogue(const std::string& effect);
-/// The index-th set of generator B outside the catalogue, alternately a pressure transducer's bow
-/// (0.5-3 % of full scale at mid-range, either sign: at a run's 45-75 bar peak a force read
-/// 1.5-9 % off, zero and full scale true) and friction fading with the energy slid
-/// (0.2-1.5 per m of energy slid per unit load: the peak 1-22 % low, most on slow ramps).
-Injection draw_outside(std::uint64_t index, gap::Condition c);
+/// The index-th set outside the catalogue (generators A and B), alternately a pressure
+/// transducer's bow (0.5-3 % of full scale at mid-range, either sign: at B's 45-75 bar peaks a
+/// force read 1.5-9 % off, zero and full scale true) and friction fading with the energy slid
+/// (0.2-1.5 per m of energy slid per unit load: B's peaks 1-22 % low, most on slow ramps).
+Injection draw_outside(std::uint64_t index, gap::Condition c, Generator g = Generator::B);
 
 /// Simulates the injection in its condition (from referee_null), diagnoses blind, scores.
 TrialResult run_trial(const Injection& inj, std::uint64_t seed, const gap::Options& o);

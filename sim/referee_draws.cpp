@@ -175,10 +175,10 @@ Injection draw_pair(Rng& rng, gap::Condition c, Generator g) {
   return inj;
 }
 
-Injection draw_outside(std::uint64_t index, gap::Condition c) {
+Injection draw_outside(std::uint64_t index, gap::Condition c, Generator g) {
   Injection inj;
   inj.condition = c;
-  inj.generator = Generator::B;
+  inj.generator = g;
   Rng rng(outside_seed(index) * 7 + 3);
   if (index % 2 == 0) {
     inj.effect = "pressure_bow";
@@ -213,6 +213,8 @@ void inject_one(Scenario& s, const std::string& effect, double magnitude) {
   if (effect == "speed_friction") s.effects.speed_friction = magnitude;
   if (effect == "roller_friction") s.effects.roller_friction = 1.0 / magnitude;
   if (effect == "cradle_cap") s.effects.cradle_cap_ratio = magnitude / s.wheel_load_n;
+  if (effect == "pressure_bow") s.effects.pressure_bow_ratio = magnitude;
+  if (effect == "friction_fade") s.effects.fade_per_m = magnitude;
   if (effect == "misspecified") s.tyre.family = TyreMf61::Family::Burckhardt;
 }
 

@@ -22,6 +22,8 @@ std::vector<std::string> Effects::active() const {
   if (tester_force_lag_s > 0) a.push_back("tester_force_lag");
   if (wheel_radius_error_ratio != 0) a.push_back("wheel_radius_error");
   if (cradle_cap_ratio > 0) a.push_back("cradle_cap");
+  if (pressure_bow_ratio != 0) a.push_back("pressure_bow");
+  if (fade_per_m > 0) a.push_back("friction_fade");
   return a;
 }
 
@@ -100,11 +102,12 @@ Scenario parse_scenario(std::string_view text, const std::string& source) {
   }
   if (const auto* t = rd.table(root, "", "effects")) {
     const std::string p = "effects.";
-    rd.check_keys(*t, p,
-                  {"relaxation_length_m", "wheel_inertia", "brake_threshold_bar", "speed_friction",
-                   "load_transfer", "roller_friction", "slip_offset", "pressure_lag_s",
-                   "pressure_noise_bar", "time_offset_s", "encoder_ppr", "tester_force_lag_s",
-                   "wheel_radius_error_ratio", "cradle_cap_ratio"});
+    rd.check_keys(
+        *t, p,
+        {"relaxation_length_m", "wheel_inertia", "brake_threshold_bar", "speed_friction",
+         "load_transfer", "roller_friction", "slip_offset", "pressure_lag_s", "pressure_noise_bar",
+         "time_offset_s", "encoder_ppr", "tester_force_lag_s", "wheel_radius_error_ratio",
+         "cradle_cap_ratio", "pressure_bow_ratio", "fade_per_m"});
     auto& e = s.effects;
     e.relaxation_length_m = rd.number(*t, p, "relaxation_length_m", e.relaxation_length_m, 0, 2);
     e.wheel_inertia = rd.boolean(*t, p, "wheel_inertia", e.wheel_inertia);
@@ -121,6 +124,8 @@ Scenario parse_scenario(std::string_view text, const std::string& source) {
     e.wheel_radius_error_ratio =
         rd.number(*t, p, "wheel_radius_error_ratio", e.wheel_radius_error_ratio, -0.1, 0.1);
     e.cradle_cap_ratio = rd.number(*t, p, "cradle_cap_ratio", e.cradle_cap_ratio, 0, 2);
+    e.pressure_bow_ratio = rd.number(*t, p, "pressure_bow_ratio", e.pressure_bow_ratio, -0.2, 0.2);
+    e.fade_per_m = rd.number(*t, p, "fade_per_m", e.fade_per_m, 0, 100);
   }
   if (const auto* t = rd.table(root, "", "tyre")) {
     const std::string p = "tyre.";

@@ -31,6 +31,12 @@ struct Effects {
   /// Roller only: the cradle caps the braking force at this x Fz (sin beta of the wheel on the
   /// rear roller; 0 = off).
   double cradle_cap_ratio = 0.0;
+  /// Outside the gap catalogue: the pressure transducer's bow through zero and 160 bar, its
+  /// largest deviation (at 80 bar) this fraction of 160 bar (p + 4 a 160 x (1 - x), x = p / 160).
+  double pressure_bow_ratio = 0.0;
+  /// Outside the gap catalogue: friction fading with the energy slid, mu / (1 + fade d), d the
+  /// integral of F v_slip / Fz dt over the run (m).
+  double fade_per_m = 0.0;
   std::vector<std::string> active() const;
 };
 

@@ -13,8 +13,9 @@ namespace brakefit::sim {
 namespace {
 
 constexpr std::int64_t kLogEpochUs = 1700000000LL * 1000000LL;  // recordings start 2023-11-14
-constexpr int kLoadTransferIterations = 4;   // Fz = W + g F: a contraction while g dF/dFz < 1
-constexpr double kNegligibleInertia = 0.05;  // kg m^2, "wheel_inertia = false"
+constexpr int kLoadTransferIterations = 4;       // Fz = W + g F: a contraction while g dF/dFz < 1
+constexpr double kNegligibleInertia = 0.05;      // kg m^2, "wheel_inertia = false"
+constexpr double kPressureFullScaleBar = 160.0;  // the transducer's range (pressure_bow_ratio)
 constexpr double kIdealPpr = 1e6;
 
 /// Quadrature encoder after x4 decoding: cumulative count and the time of the last edge.
@@ -93,6 +94,8 @@ SimResult simulate(const Scenario& s) {
   double omega_w = v0 / rw;
   double kappa_t = 0.0;  // transient slip (relaxation)
   double p_sensor = 0.0, motor_integral = 0.0, tester_force = 0.0;
+  double slid_m = 0.0;  // energy slid per unit load (friction fade)
+  const double mu_unfaded = tyre_state.lambda_mu;
   const double counts_per_rev = 4.0 * ppr;
   Encoder enc_ref{counts_per_rev / (2 * M_PI)}, enc_wheel{counts_per_rev / (2 * M_PI)};
   std::deque<double> pressure_history;  // for the channel time offset
@@ -125,6 +128,7 @@ SimResult simulate(const Scenario& s) {
     const double kappa = v_ref > 0.05 ? std::clamp((v_ref - v_wheel) / v_ref, -1.0, 1.0)
                                       : (v_wheel < v_ref ? 1.0 : 0.0);
     tyre_state.slip_speed_mps = std::abs(kappa_t) * v_ref;
+    if (e.fade_per_m > 0) tyre_state.lambda_mu = mu_unfaded / (1.0 + e.fade_per_m * slid_m);
     // Relaxation: sigma dk'/dt + V k' = V k, implicit in k'.
     const double a = e.relaxation_length_m > 0 ? dt * v_ref / e.relaxation_length_m : INFINITY;
     const double w = std::isinf(a) ? 1.0 : a / (1.0 + a);
@@ -169,6 +173,7 @@ SimResult simulate(const Scenario& s) {
     const double denom = std::max(1.0, 1.0 - dt * rw * dF_domega / inertia);
     omega_w = std::max(0.0, omega_w + dt * (force * rw - tb) / inertia / denom);
     kappa_t = kappa_new;
+    slid_m += std::abs(force * kappa_new * v_ref) / tyre_state.fz_n * dt;
     r.peak_force_n = std::max(r.peak_force_n, force);
     if (roller) {
       // Motor PI speed control while running; off after switch-off.
@@ -220,8 +225,11 @@ SimResult simulate(const Scenario& s) {
           enc_ref.frame(roller ? can::Channel::Roller : can::Channel::FifthWheel, t_us));
       r.frames.push_back(enc_wheel.frame(can::Channel::Wheel, t_us));
       can::PressureMsg pm;
-      pm.pressure_bar = std::max(
-          0.0, p_sensor + (e.pressure_noise_bar > 0 ? e.pressure_noise_bar * rng.normal() : 0.0));
+      const double x = std::clamp(p_sensor / kPressureFullScaleBar, 0.0, 1.0);
+      const double bow_bar = 4 * e.pressure_bow_ratio * kPressureFullScaleBar * x * (1 - x);
+      pm.pressure_bar =
+          std::max(0.0, p_sensor + bow_bar +
+                            (e.pressure_noise_bar > 0 ? e.pressure_noise_bar * rng.normal() : 0.0));
       pm.counter = p_counter++;
       pm.sample_time_us = static_cast<std::uint32_t>(std::llround(t_next * 1e6) & 0xFFFFFFFFLL);
       r.frames.push_back({t_us, "can0", can::encode(pm)});

@@ -1,5 +1,6 @@
-// Generator B's effects outside the gap catalogue (a pressure transducer's bow, friction fading
-// with the energy slid): each follows its law, and the diagnosis gives them no catalogue name.
+// The effects outside the gap catalogue generators A and B inject (a pressure transducer's bow,
+// friction fading with the energy slid): each follows its law, and the diagnosis gives them no
+// catalogue name.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 
 #include "core/pipeline/event_csv.hpp"
 #include "sim/referee.hpp"
+#include "sim/scenario.hpp"
 #include "sim/second/generator.hpp"
 
 using namespace brakefit;
@@ -81,4 +83,19 @@ TEST(OutsideCatalogue, NeitherIsGivenACatalogueName) {
   sim::TrialResult claim = fade;
   claim.verdict = {"slip_offset"};
   EXPECT_FALSE(claim.correct());
+}
+
+TEST(OutsideCatalogue, GeneratorAsFadeIsUnexplainedAndItsScenarioReadsBoth) {
+  const auto s = sim::parse_scenario(
+      "[scenario]\nbench = \"roller\"\n[effects]\nfade_per_m = 1.0\npressure_bow_ratio = -0.01\n",
+      "f.toml");
+  EXPECT_EQ(s.effects.fade_per_m, 1.0);
+  EXPECT_EQ(s.effects.pressure_bow_ratio, -0.01);
+  EXPECT_THROW(sim::parse_scenario("[effects]\npressure_bow_ratio = 0.5\n", "f.toml"), InputError);
+  const auto fade =
+      sim::run_trial(sim::draw_outside(1, gap::Condition::Roller, sim::Generator::A),
+                     sim::outside_seed(1), gap::calibrated_options(gap::Condition::Roller));
+  ASSERT_FALSE(fade.verdict.empty());
+  EXPECT_EQ(fade.verdict.front(), "unexplained");
+  EXPECT_GT(fade.gap_before_n, 3 * fade.noise_n);
 }
