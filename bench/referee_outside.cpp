@@ -14,7 +14,7 @@ namespace brakefit::bench {
 nlohmann::ordered_json run_outside(gap::Condition c, sim::Generator trial_gen,
                                    const gap::Options& gates, const OutsideSettings& st,
                                    const std::string& cname) {
-  nlohmann::ordered_json j;
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
   if (st.n <= 0) return j;
   if (trial_gen == sim::Generator::C || c == gap::Condition::RollerToRoad) {
     std::cerr << fmt::format(
