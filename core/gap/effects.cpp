@@ -35,6 +35,8 @@ const char* to_string(Effect e) {
       return "reference_bias";
     case Effect::TyreShift:
       return "tyre_shift";
+    case Effect::FrictionFade:
+      return "friction_fade";
   }
   return "?";
 }
@@ -57,7 +59,7 @@ std::span<const EffectParam> effect_params(Effect e) {
   // PKX1-3 vs PDX1-2; r 1.3 for the simulated TNO 205/60R15), and one ratio for both misread q by
   // 40 %. Against a held curve E moves with the load as well (PEX2: E += e x relative load).
   // Built once: predict() asks for every evaluation of the fits.
-  constexpr auto kEffects = static_cast<std::size_t>(Effect::TyreShift) + 1;
+  constexpr auto kEffects = static_cast<std::size_t>(Effect::FrictionFade) + 1;
   static const std::array<std::vector<EffectParam>, kEffects> table = [] {
     std::array<std::vector<EffectParam>, kEffects> t;
     for (std::size_t i = 0; i < kEffects; ++i) t[i] = {effect_param(static_cast<Effect>(i))};
@@ -131,6 +133,8 @@ EffectParam effect_param(Effect e) {
       return {"reference_slip_bias_ratio", -0.01, 0.01, 0.0};
     case Effect::TyreShift:  // range: kTyreShiftBoundRatio and the runs' ref_bias_bound
       return {"tyre_shift_ratio", -0.01, 0.01, 0.0};
+    case Effect::FrictionFade:  // mu / (1 + k E), E the energy slid so far in kJ
+      return {"fade_per_kj", 0.0, 20.0, 0.1, true};
   }
   return {"?", 0, 0, 0};
 }

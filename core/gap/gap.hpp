@@ -45,7 +45,11 @@ enum class Effect {
   /// Not a candidate: a nuisance in every fit when the baseline earns it, in place of
   /// ReferenceBias: the tyre's own horizontal shift (MF 6.1 SHx, a slip of a few 1e-4) and the
   /// quantisation's bias, one slip bias common to the runs.
-  TyreShift
+  TyreShift,
+  /// Not a candidate and never named: speed friction's rival, a friction fading with the energy
+  /// the tyre slid so far in the run (outside the catalogue; fade_rival.cpp). Where it explains
+  /// as much as speed friction, neither is named.
+  FrictionFade
 };
 inline constexpr std::array<Effect, 8> kAllEffects = {
     Effect::RelaxationLength, Effect::TimeOffset,   Effect::WheelInertia,  Effect::BrakeThreshold,

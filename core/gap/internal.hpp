@@ -329,4 +329,21 @@ std::optional<RestThreshold> threshold_at_rest(const std::vector<Run>& runs,
                                                const Fit& current, double current_heldout_n,
                                                double noise_n, const Fitter& fit);
 
+/// The energy the contact slid so far at each sample of the run, kJ: |F| |slip| V integrated
+/// over time from the run's own channels (fade_rival.cpp).
+std::vector<double> slid_energy_kj(const Run& r);
+
+/// Speed friction's rival, a friction fading with the energy slid (fade_rival.cpp).
+struct FadeRival {
+  std::vector<Effect> model;  ///< the chosen model with the fade in speed friction's place
+  double heldout_n = 0.0;
+  double fade_per_kj = 0.0;  ///< fitted on every run
+  std::string note;
+};
+/// Where the chosen model names speed friction: the fade fitted in its place, returned when speed
+/// friction does not beat it held out by the gain gate (it is then not shown to be speed
+/// friction's; nothing is named). Nothing where speed friction is not named or beats the fade.
+std::optional<FadeRival> fade_rival(const std::vector<Run>& runs, const std::vector<Effect>& chosen,
+                                    double current_heldout_n, const Fitter& fit, const Options& o);
+
 }  // namespace brakefit::gap

@@ -176,6 +176,7 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   // then applied in that order whatever the order of `effects` (they commute but for the initial
   // state of the relaxation, which needs the force side), and speed friction at their slip.
   double sigma_m = 0, slip_offset = 0, dt_s = 0, threshold_n = 0, cap_n = INFINITY, lambda_mu_v = 0;
+  double fade_per_kj = 0;
   bool relaxation = false, threshold = false;
   // A load following the deceleration a: D by 1 + q a, B C D by (1 + q a)^ratio, E by e q a.
   auto follow_load = [&](const std::vector<double>& decel, double q, double ratio, double e_slope) {
@@ -232,6 +233,9 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
         break;
       case Effect::SpeedFriction:  // applied below, at the slip the curve is read at
         lambda_mu_v = q;
+        break;
+      case Effect::FrictionFade:  // speed friction's rival (fade_rival.cpp), applied below
+        fade_per_kj = q;
         break;
       case Effect::CradleCap:  // the cradle caps the tyre's force (before the wheel's terms)
         cap_n = q;
@@ -291,6 +295,12 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
       d_scale[i] *= mu;
       b_scale[i] /= mu;
     }
+  }
+  // A friction fading with the energy slid so far, mu / (1 + k E): E from the run's own force
+  // channel, slip and speed (the tyre's heat is what it slid, whatever the law of its curve).
+  if (fade_per_kj != 0) {
+    const std::vector<double> e_kj = slid_energy_kj(r);
+    for (std::size_t i = 0; i < n; ++i) d_scale[i] /= 1.0 + fade_per_kj * e_kj[i];
   }
   // The Magic Formula, F = D sin(C atan(phi)), phi = u - E (u - atan u), u = B x, a stage at a
   // time over the run so that the arctangents and the sine run as vectors (core/vecmath.hpp).
