@@ -1,0 +1,86 @@
+// Speed friction against a friction fading with the energy slid (core/gap/fade_rival.cpp): the
+// fade's law, and the check that names neither where the fade explains as much.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "core/gap/gap.hpp"
+#include "core/gap/internal.hpp"
+#include "sim/referee.hpp"
+
+using namespace brakefit;
+
+namespace {
+
+/// A run at a steady 20 m/s and 5 % slip under a force rising 1 kN per second.
+gap::Run steady_run() {
+  gap::Run r;
+  for (int i = 0; i <= 100; ++i) {
+    const double t_s = 0.01 * i;
+    r.t_s.push_back(t_s);
+    r.slip.push_back(0.05);
+    r.v_ref_mps.push_back(20.0);
+    r.force_n.push_back(1000.0 * t_s);
+  }
+  const std::size_t n = r.t_s.size();
+  r.wheel_accel_mps2.assign(n, 0.0);
+  r.ref_decel_mps2.assign(n, 0.0);
+  r.pressure_rate_bar_per_s.assign(n, 0.0);
+  r.wheel_radius_m = 0.3;
+  return r;
+}
+
+bool names(const sim::TrialResult& t, const std::string& effect) {
+  return std::find(t.verdict.begin(), t.verdict.end(), effect) != t.verdict.end();
+}
+
+bool fade_note(const sim::TrialResult& t) {
+  return std::any_of(t.notes.begin(), t.notes.end(), [](const std::string& s) {
+    return s.find("fading with the energy") != std::string::npos;
+  });
+}
+
+}  // namespace
+
+TEST(FadeRival, TheEnergySlidIsTheSlidingPowerIntegrated) {
+  const gap::Run r = steady_run();
+  const auto e_kj = gap::slid_energy_kj(r);
+  ASSERT_EQ(e_kj.size(), r.t_s.size());
+  // P = F x slip x V = 1000 t x 0.05 x 20 W: E = 500 t^2 J.
+  for (std::size_t i = 0; i < r.t_s.size(); i += 10)
+    EXPECT_NEAR(e_kj[i], 0.5 * r.t_s[i] * r.t_s[i], 1e-9) << "sample " << i;
+}
+
+TEST(FadeRival, TheFadeScalesThePeakByOneOverOnePlusKE) {
+  const gap::Run r = steady_run();
+  const std::vector<double> plain_p{10.0, 1.6, 3000.0, 0.0};
+  std::vector<double> faded_p = plain_p;
+  faded_p.push_back(0.4);  // per kJ
+  const auto plain = gap::predict(r, plain_p, {});
+  const auto faded = gap::predict(r, faded_p, {gap::Effect::FrictionFade});
+  const auto e_kj = gap::slid_energy_kj(r);
+  for (std::size_t i = 0; i < r.t_s.size(); i += 10)
+    EXPECT_NEAR(faded[i], plain[i] / (1 + 0.4 * e_kj[i]), 1e-6) << "sample " << i;
+  EXPECT_LT(faded.back(), 0.85 * plain.back());  // E = 0.5 kJ at the end: a sixth off
+}
+
+TEST(FadeRival, AFadeOnTheGroundIsNotNamedSpeedFriction) {
+  // Generator B's ground runs at 30, 50 and 70 km/h: the faster runs slide more per unit of slip
+  // and fade more, as a friction falling with the sliding speed does. Speed friction passes
+  // forward selection here; the fade fitted in its place explains as much.
+  const gap::Options o = gap::calibrated_options(gap::Condition::Ground);
+  const sim::Injection inj{"friction_fade", 1.0, gap::Condition::Ground, sim::Generator::B};
+  const auto t = sim::run_trial(inj, 1, o);
+  EXPECT_FALSE(names(t, "speed_friction"));
+  ASSERT_FALSE(t.verdict.empty());
+  EXPECT_EQ(t.verdict.front(), "unexplained");
+  EXPECT_TRUE(fade_note(t));
+  // A friction that falls with the sliding speed is still speed friction's.
+  const sim::Injection sf{"speed_friction", 1.0, gap::Condition::Ground, sim::Generator::B};
+  const auto s = sim::run_trial(sf, 5, o);
+  ASSERT_FALSE(s.verdict.empty());
+  EXPECT_EQ(s.verdict.front(), "speed_friction");
+  EXPECT_FALSE(fade_note(s));
+}
