@@ -241,11 +241,12 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
              100 * (1 - sel.heldout_n / std::max(rep.gap_before_rmse_n, 1e-12))),
          "passed, but the baseline's gap is within the noise floor (see the notes)");
   // Speed friction against a fade with the energy slid (fade_rival.cpp): where the fade, outside
-  // the catalogue, explains as much, the friction's fall is not shown to be speed friction's.
+  // the catalogue, explains the runs far better, the friction's fall is not speed friction's.
   if (!named_effects(sel.chosen).empty())
-    if (auto f = fade_rival(sel.runs, sel.chosen, sel.heldout_n, fit, o))
+    if (auto f = fade_rival(sel.runs, sel.chosen, sel.fit, sel.heldout_n, fit))
       veto(std::move(f->note),
-           "passed, but a friction fading with the energy slid explains as much (see the notes)");
+           "passed, but a friction fading with the energy slid explains the runs far better "
+           "(see the notes)");
   rep.accepted = sel.chosen;
   rep.after = sel.fit;
   rep.gap_after_rmse_n = sel.heldout_n;

@@ -48,7 +48,7 @@ enum class Effect {
   TyreShift,
   /// Not a candidate and never named: speed friction's rival, a friction fading with the energy
   /// the tyre slid so far in the run (outside the catalogue; fade_rival.cpp). Where it explains
-  /// as much as speed friction, neither is named.
+  /// the runs far better than speed friction, neither is named.
   FrictionFade
 };
 inline constexpr std::array<Effect, 8> kAllEffects = {

@@ -336,14 +336,17 @@ std::vector<double> slid_energy_kj(const Run& r);
 /// Speed friction's rival, a friction fading with the energy slid (fade_rival.cpp).
 struct FadeRival {
   std::vector<Effect> model;  ///< the chosen model with the fade in speed friction's place
-  double heldout_n = 0.0;
-  double fade_per_kj = 0.0;  ///< fitted on every run
+  bool in_sample = false;     ///< compared on every run at once (beside load transfer)
+  double current_n = 0.0;     ///< what the chosen model leaves, held out or in-sample
+  double rival_n = 0.0;       ///< what the fade leaves in speed friction's place, the same way
+  double fade_per_kj = 0.0;   ///< fitted on every run
   std::string note;
 };
-/// Where the chosen model names speed friction: the fade fitted in its place, returned when speed
-/// friction does not beat it held out by the gain gate (it is then not shown to be speed
-/// friction's; nothing is named). Nothing where speed friction is not named or beats the fade.
+/// Where the chosen model names speed friction: the fade fitted in its place, returned when it
+/// leaves under half of what speed friction leaves (held out; in-sample beside load transfer):
+/// the friction's fall then follows the energy slid, not the sliding speed; nothing is named.
 std::optional<FadeRival> fade_rival(const std::vector<Run>& runs, const std::vector<Effect>& chosen,
-                                    double current_heldout_n, const Fitter& fit, const Options& o);
+                                    const Fit& current, double current_heldout_n,
+                                    const Fitter& fit);
 
 }  // namespace brakefit::gap
