@@ -240,8 +240,8 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
              to_string(named_effects(sel.chosen).front()),
              100 * (1 - sel.heldout_n / std::max(rep.gap_before_rmse_n, 1e-12))),
          "passed, but the baseline's gap is within the noise floor (see the notes)");
-  // Speed friction against a fade with the energy slid (fade_rival.cpp): where the fade, outside
-  // the catalogue, explains the runs far better, the friction's fall is not speed friction's.
+  // Each named effect against a fade with the energy slid (fade_rival.cpp): where the fade,
+  // outside the catalogue, in an effect's place explains the runs far better, nothing is named.
   if (!named_effects(sel.chosen).empty())
     if (auto f = fade_rival(sel.runs, sel.chosen, sel.fit, sel.heldout_n, fit))
       veto(std::move(f->note),

@@ -1,9 +1,9 @@
-// Speed friction against a friction that fades with the energy slid. Where the runs' speeds
-// differ, a faster run slides more per unit of slip and so heats the tyre more: a fade looks like
-// a friction falling with the sliding speed. The evidence only speed friction leaves is a
-// friction that follows the sliding speed now, whatever the run slid before; a fade follows the
-// energy slid so far (a slow ramp fades more at the same slip and speed). The fade is outside the
-// catalogue: it is fitted as a rival, never named.
+// Each named effect against a friction that fades with the energy slid. A fade changes the curve
+// from run to run and along each run: where the runs' speeds differ, a faster run slides more per
+// unit of slip and heats the tyre more, as a friction falling with the sliding speed does; at one
+// speed a slow ramp slides longest before its peak and fades most, and an inertia's or a lag's
+// run-to-run terms take part of that. The fade follows the energy slid so far, whatever the slip
+// and speed now. It is outside the catalogue: it is fitted as a rival, never named.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -36,29 +36,34 @@ std::vector<double> slid_energy_kj(const Run& r) {
 std::optional<FadeRival> fade_rival(const std::vector<Run>& runs, const std::vector<Effect>& chosen,
                                     const Fit& current, double current_heldout_n,
                                     const Fitter& fit) {
-  if (std::find(chosen.begin(), chosen.end(), Effect::SpeedFriction) == chosen.end())
-    return std::nullopt;
-  FadeRival f;
-  f.model = chosen;
-  std::replace(f.model.begin(), f.model.end(), Effect::SpeedFriction, Effect::FrictionFade);
-  const Fit all = fit(pointers(runs), f.model);
   // Beside load transfer the model was judged on every run at once (one run left out, load
   // transfer's fold trades the tyre's shape for the load): the fade is compared the same way.
-  f.in_sample = std::any_of(chosen.begin(), chosen.end(), is_load_transfer);
-  f.current_n = f.in_sample ? in_sample_rms(current) : current_heldout_n;
-  f.rival_n = f.in_sample ? in_sample_rms(all) : heldout(runs, f.model, fit);
-  // Beside a second effect the fade often fits about as well as speed friction (the other effect
-  // takes up the difference), so a tie is no evidence against speed friction; only a fade that
-  // leaves under half of what speed friction leaves is a better account of the runs.
-  if (f.rival_n * kFadeMargin > f.current_n) return std::nullopt;
-  f.fade_per_kj = all.params.at(*param_offset(f.model, Effect::FrictionFade));
-  f.note = fmt::format(
-      "speed_friction leaves {:.1f} N {}, but a friction fading with the energy the tyre slid so "
-      "far (mu / (1 + k E), k = {:.3g} per kJ, outside the catalogue) leaves {:.1f} N in its "
-      "place (under 1/{:g}): the friction falling on the faster runs follows the energy slid "
-      "better than the sliding speed, so nothing is named",
-      f.current_n, f.in_sample ? "in-sample" : "held out", f.fade_per_kj, f.rival_n, kFadeMargin);
-  return f;
+  const bool in_sample = std::any_of(chosen.begin(), chosen.end(), is_load_transfer);
+  const double current_n = in_sample ? in_sample_rms(current) : current_heldout_n;
+  for (const Effect e : named_effects(chosen)) {
+    if (is_load_transfer(e)) continue;  // its four parameters reshape the curve: no like-for-like
+    FadeRival f;
+    f.replaced = e;
+    f.model = chosen;
+    std::replace(f.model.begin(), f.model.end(), e, Effect::FrictionFade);
+    const Fit all = fit(pointers(runs), f.model);
+    f.in_sample = in_sample;
+    f.current_n = current_n;
+    f.rival_n = in_sample ? in_sample_rms(all) : heldout(runs, f.model, fit);
+    // Beside a second effect the fade often fits about as well (the other effect takes up the
+    // difference), so a tie is no evidence against the effect; only a fade that leaves under half
+    // of what the effect leaves is a better account of the runs.
+    if (f.rival_n * kFadeMargin > f.current_n) continue;
+    f.fade_per_kj = all.params.at(*param_offset(f.model, Effect::FrictionFade));
+    f.note = fmt::format(
+        "{} leaves {:.1f} N {}, but a friction fading with the energy the tyre slid so far "
+        "(mu / (1 + k E), k = {:.3g} per kJ, outside the catalogue) leaves {:.1f} N in its place "
+        "(under 1/{:g}): the runs follow the energy slid better, so nothing is named",
+        to_string(e), f.current_n, f.in_sample ? "in-sample" : "held out", f.fade_per_kj, f.rival_n,
+        kFadeMargin);
+    return f;
+  }
+  return std::nullopt;
 }
 
 }  // namespace brakefit::gap

@@ -46,9 +46,9 @@ enum class Effect {
   /// ReferenceBias: the tyre's own horizontal shift (MF 6.1 SHx, a slip of a few 1e-4) and the
   /// quantisation's bias, one slip bias common to the runs.
   TyreShift,
-  /// Not a candidate and never named: speed friction's rival, a friction fading with the energy
-  /// the tyre slid so far in the run (outside the catalogue; fade_rival.cpp). Where it explains
-  /// the runs far better than speed friction, neither is named.
+  /// Not a candidate and never named: each named effect's rival, a friction fading with the
+  /// energy the tyre slid so far in the run (outside the catalogue; fade_rival.cpp). Where it
+  /// explains the runs far better in an effect's place, nothing is named.
   FrictionFade
 };
 inline constexpr std::array<Effect, 8> kAllEffects = {

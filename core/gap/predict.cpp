@@ -234,7 +234,7 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
       case Effect::SpeedFriction:  // applied below, at the slip the curve is read at
         lambda_mu_v = q;
         break;
-      case Effect::FrictionFade:  // speed friction's rival (fade_rival.cpp), applied below
+      case Effect::FrictionFade:  // a named effect's rival (fade_rival.cpp), applied below
         fade_per_kj = q;
         break;
       case Effect::CradleCap:  // the cradle caps the tyre's force (before the wheel's terms)
