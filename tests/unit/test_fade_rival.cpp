@@ -1,5 +1,5 @@
-// Speed friction against a friction fading with the energy slid (core/gap/fade_rival.cpp): the
-// fade's law, and the check that names neither where the fade explains as much.
+// Each named effect against a friction fading with the energy slid (core/gap/fade_rival.cpp):
+// the fade's law, and the check that names nothing where the fade explains the runs far better.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,6 +9,7 @@
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
 #include "sim/referee.hpp"
+#include "tests/unit/referee_pair_test_util.hpp"
 
 using namespace brakefit;
 
@@ -84,4 +85,19 @@ TEST(FadeRival, AFadeOnTheGroundIsNotNamedSpeedFriction) {
   ASSERT_FALSE(s.verdict.empty());
   EXPECT_EQ(s.verdict.front(), "speed_friction");
   EXPECT_FALSE(fade_note(s));
+}
+
+TEST(FadeRival, AFadingRollerTyreIsNotNamedWheelInertia) {
+  // Generator B's outside set 29 from every export: a car's five runs at 2.4 km/h, 200 Hz. At one
+  // speed the slow ramp slides longest and fades most; a wheel's inertia takes part of that (it
+  // passes the gates), the fade in its place leaves under half of what it leaves.
+  const test::EveryExport every;
+  gap::Options gates;  // the referee's gates for every export's roller sets
+  gates.gate_gain = 0.169;
+  gates.bic_margin_per_point = 0.3504;
+  gates.noise_factor = 1.56;
+  const auto t =
+      sim::run_trial(sim::draw_outside(29, gap::Condition::Roller), sim::outside_seed(29), gates);
+  EXPECT_FALSE(names(t, "wheel_inertia"));
+  EXPECT_TRUE(fade_note(t));
 }
