@@ -99,5 +99,7 @@ TEST(FadeRival, AFadingRollerTyreIsNotNamedWheelInertia) {
   const auto t =
       sim::run_trial(sim::draw_outside(29, gap::Condition::Roller), sim::outside_seed(29), gates);
   EXPECT_FALSE(names(t, "wheel_inertia"));
+  ASSERT_FALSE(t.verdict.empty());
+  EXPECT_EQ(t.verdict.front(), "unexplained") << ::testing::PrintToString(t.verdict);
   EXPECT_TRUE(fade_note(t));
 }
