@@ -15,7 +15,7 @@
 namespace brakefit::gap {
 
 namespace {
-// How many times less the fade must leave held out than speed friction to veto it.
+// How many times less the fade must leave than the model naming the effect, to veto it.
 constexpr double kFadeMargin = 2.0;
 }  // namespace
 
@@ -56,9 +56,9 @@ std::optional<FadeRival> fade_rival(const std::vector<Run>& runs, const std::vec
     if (f.rival_n * kFadeMargin > f.current_n) continue;
     f.fade_per_kj = all.params.at(*param_offset(f.model, Effect::FrictionFade));
     f.note = fmt::format(
-        "{} leaves {:.1f} N {}, but a friction fading with the energy the tyre slid so far "
-        "(mu / (1 + k E), k = {:.3g} per kJ, outside the catalogue) leaves {:.1f} N in its place "
-        "(under 1/{:g}): the runs follow the energy slid better, so nothing is named",
+        "the model naming {} leaves {:.1f} N {}, but a friction fading with the energy the tyre "
+        "slid so far (mu / (1 + k E), k = {:.3g} per kJ, outside the catalogue) leaves {:.1f} N "
+        "in its place (under 1/{:g}): the runs follow the energy slid better, so nothing is named",
         to_string(e), f.current_n, f.in_sample ? "in-sample" : "held out", f.fade_per_kj, f.rival_n,
         kFadeMargin);
     return f;
