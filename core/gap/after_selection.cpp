@@ -242,11 +242,10 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
          "passed, but the baseline's gap is within the noise floor (see the notes)");
   // Each named effect against a fade with the energy slid (fade_rival.cpp): where the fade,
   // outside the catalogue, in an effect's place explains the runs far better, nothing is named.
-  if (!named_effects(sel.chosen).empty())
-    if (auto f = fade_rival(sel.runs, sel.chosen, sel.fit, sel.heldout_n, fit))
-      veto(std::move(f->note),
-           "passed, but a friction fading with the energy slid explains the runs far better "
-           "(see the notes)");
+  if (auto note = fade_rival(sel.runs, sel.chosen, sel.fit, sel.heldout_n, fit))
+    veto(std::move(*note),
+         "passed, but a friction fading with the energy slid explains the runs far better "
+         "(see the notes)");
   rep.accepted = sel.chosen;
   rep.after = sel.fit;
   rep.gap_after_rmse_n = sel.heldout_n;

@@ -33,35 +33,29 @@ std::vector<double> slid_energy_kj(const Run& r) {
   return e_kj;
 }
 
-std::optional<FadeRival> fade_rival(const std::vector<Run>& runs, const std::vector<Effect>& chosen,
-                                    const Fit& current, double current_heldout_n,
-                                    const Fitter& fit) {
+std::optional<std::string> fade_rival(const std::vector<Run>& runs,
+                                      const std::vector<Effect>& chosen, const Fit& current,
+                                      double current_heldout_n, const Fitter& fit) {
   // Beside load transfer the model was judged on every run at once (one run left out, load
   // transfer's fold trades the tyre's shape for the load): the fade is compared the same way.
   const bool in_sample = std::any_of(chosen.begin(), chosen.end(), is_load_transfer);
   const double current_n = in_sample ? in_sample_rms(current) : current_heldout_n;
   for (const Effect e : named_effects(chosen)) {
     if (is_load_transfer(e)) continue;  // its four parameters reshape the curve: no like-for-like
-    FadeRival f;
-    f.replaced = e;
-    f.model = chosen;
-    std::replace(f.model.begin(), f.model.end(), e, Effect::FrictionFade);
-    const Fit all = fit(pointers(runs), f.model);
-    f.in_sample = in_sample;
-    f.current_n = current_n;
-    f.rival_n = in_sample ? in_sample_rms(all) : heldout(runs, f.model, fit);
+    std::vector<Effect> model = chosen;
+    std::replace(model.begin(), model.end(), e, Effect::FrictionFade);
+    const Fit all = fit(pointers(runs), model);
+    const double rival_n = in_sample ? in_sample_rms(all) : heldout(runs, model, fit);
     // Beside a second effect the fade often fits about as well (the other effect takes up the
     // difference), so a tie is no evidence against the effect; only a fade that leaves under half
     // of what the effect leaves is a better account of the runs.
-    if (f.rival_n * kFadeMargin > f.current_n) continue;
-    f.fade_per_kj = all.params.at(*param_offset(f.model, Effect::FrictionFade));
-    f.note = fmt::format(
+    if (rival_n * kFadeMargin > current_n) continue;
+    return fmt::format(
         "the model naming {} leaves {:.1f} N {}, but a friction fading with the energy the tyre "
         "slid so far (mu / (1 + k E), k = {:.3g} per kJ, outside the catalogue) leaves {:.1f} N "
         "in its place (under 1/{:g}): the runs follow the energy slid better, so nothing is named",
-        to_string(e), f.current_n, f.in_sample ? "in-sample" : "held out", f.fade_per_kj, f.rival_n,
-        kFadeMargin);
-    return f;
+        to_string(e), current_n, in_sample ? "in-sample" : "held out",
+        all.params.at(*param_offset(model, Effect::FrictionFade)), rival_n, kFadeMargin);
   }
   return std::nullopt;
 }

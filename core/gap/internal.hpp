@@ -333,21 +333,12 @@ std::optional<RestThreshold> threshold_at_rest(const std::vector<Run>& runs,
 /// over time from the run's own channels (fade_rival.cpp).
 std::vector<double> slid_energy_kj(const Run& r);
 
-/// A named effect's rival, a friction fading with the energy slid (fade_rival.cpp).
-struct FadeRival {
-  std::vector<Effect> model;  ///< the chosen model with the fade in the effect's place
-  Effect replaced = Effect::SpeedFriction;  ///< the effect the fade stands in for
-  bool in_sample = false;    ///< compared on every run at once (beside load transfer)
-  double current_n = 0.0;    ///< what the chosen model leaves, held out or in-sample
-  double rival_n = 0.0;      ///< what the fade leaves in the effect's place, the same way
-  double fade_per_kj = 0.0;  ///< fitted on every run
-  std::string note;
-};
-/// For each effect the chosen model names (not load transfer): the fade fitted in its place,
-/// returned for the first where it leaves under half of what the chosen model leaves (held out;
-/// in-sample beside load transfer): the runs then follow the energy slid; nothing is named.
-std::optional<FadeRival> fade_rival(const std::vector<Run>& runs, const std::vector<Effect>& chosen,
-                                    const Fit& current, double current_heldout_n,
-                                    const Fitter& fit);
+/// For each effect the chosen model names (not load transfer): the fade (a friction fading with
+/// the energy slid, outside the catalogue) fitted in its place; for the first where it leaves
+/// under half of what the chosen model leaves (held out; in-sample beside load transfer), the
+/// note saying so: the runs then follow the energy slid, and nothing is named.
+std::optional<std::string> fade_rival(const std::vector<Run>& runs,
+                                      const std::vector<Effect>& chosen, const Fit& current,
+                                      double current_heldout_n, const Fitter& fit);
 
 }  // namespace brakefit::gap
