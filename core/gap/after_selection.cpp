@@ -1,7 +1,7 @@
-// What forward selection named, checked in turn: a lag or delay swapped for its twin, a pair that
-// neither effect explains alone, a threshold beside a slip offset fitted below the wheel's rest,
-// the fit-quality veto and the noise floor's; then the named effects' joint estimates and the
-// verdict.
+// What forward selection named, checked in turn: a lag or delay swapped for its twin, an effect
+// the later ones make needless, a pair that neither effect explains alone, a threshold beside a
+// slip offset fitted below the wheel's rest, the fit-quality veto and the noise floor's; then the
+// named effects' joint estimates and the verdict.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -127,6 +127,18 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
         e.decision = fmt::format("replaced by {} (see the notes)", to_string(s->score.effect));
       }
     take(rep, sel, *s, o);
+  }
+  // An effect named before others that, beside them, fits worse held out than none in its place.
+  while (auto d = needless_effect(sel.runs, sel.chosen, sel.heldout_n, fit)) {
+    for (auto& e : rep.effects)
+      if (e.accepted && e.effect == d->dropped) {
+        e.accepted = false;
+        e.decision = "passed, but needless beside the effects named after it (see the notes)";
+      }
+    rep.notes.push_back(std::move(d->note));
+    sel.chosen = std::move(d->model);
+    sel.fit = std::move(d->fit);
+    sel.heldout_n = d->heldout_n;
   }
   // Two effects that neither explains alone (their bends partly cancel): the leading candidates
   // in pairs, when a structured gap is left and at most two were named. With two named, the

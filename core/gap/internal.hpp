@@ -177,9 +177,9 @@ struct Selection {
   std::string named() const;
 };
 /// The checks on what forward selection named (after_selection.cpp), in order: a lag or delay
-/// swapped for its twin, a pair neither explains alone, a threshold beside a slip offset fitted
-/// below the wheel's rest, the fit-quality and noise-floor vetoes. Fills rep.accepted, after,
-/// gap_after_rmse_n, the joint estimates and the verdict.
+/// swapped for its twin, an effect the later ones make needless, a pair neither explains alone, a
+/// threshold beside a slip offset fitted below the wheel's rest, the fit-quality and noise-floor
+/// vetoes. Fills rep.accepted, after, gap_after_rmse_n, the joint estimates and the verdict.
 void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Options& o);
 
 /// A time offset or relaxation (e, scored on runs against the model `current`) that a drooping
@@ -281,6 +281,20 @@ struct LagSwap {
 std::optional<LagSwap> swap_lag_twin(const std::vector<Run>& runs,
                                      const std::vector<Effect>& chosen, double current_heldout_n,
                                      double gap_before_n, const Fit& base_fit, const Fitter& fit);
+
+/// A named effect the others make needless (needless.cpp).
+struct Needless {
+  Effect dropped = Effect::TimeOffset;
+  std::vector<Effect> model;  ///< the chosen model without it
+  Fit fit;
+  double heldout_n = 0.0;
+  std::string note;
+};
+/// Where two or more effects are named (none of them load transfer): the model without the one
+/// whose removal leaves least held out, when that is less than the chosen model leaves.
+std::optional<Needless> needless_effect(const std::vector<Run>& runs,
+                                        const std::vector<Effect>& chosen, double current_heldout_n,
+                                        const Fitter& fit);
 
 /// Each accepted effect's parameters become the final model's (rep.after): an effect named in
 /// round 1 is re-estimated beside those named after it, so a pair's magnitudes are the joint

@@ -260,6 +260,23 @@ TEST(GapPairs, ALagNamedBeforeItsPartnerIsChosenAgainBesideIt) {
   })) << why;
 }
 
+TEST(GapPairs, AnEffectTheEffectsNamedAfterItMakeNeedlessIsDropped) {
+  // The referee's ground pair 14 (generator A, seed 1): a 23.6 ms late channel with a 2.6 kg m^2
+  // wheel. A relaxation length took the lag's place in round 1, the inertia and a time offset
+  // (7.2 ms, a third of the truth) came after it, 24.4 N left held out. Without the relaxation
+  // the two leave 6.1 N: it is dropped, and both are named at their magnitudes.
+  const auto [inj, res, why] = referee_pair(gap::Condition::Ground, sim::Generator::A, 14);
+  ASSERT_EQ(inj.effect, "time_offset");
+  ASSERT_EQ(inj.effect2, "wheel_inertia");
+  EXPECT_TRUE(res.correct()) << ::testing::PrintToString(res.verdict) << why;
+  EXPECT_EQ(std::count(res.verdict.begin(), res.verdict.end(), "relaxation_length"), 0) << why;
+  EXPECT_NEAR(res.estimate, res.truth.magnitude, 0.05 * res.truth.magnitude) << why;
+  EXPECT_NEAR(res.estimate2, res.truth.magnitude2, 0.05 * res.truth.magnitude2) << why;
+  EXPECT_TRUE(std::any_of(res.notes.begin(), res.notes.end(), [](const std::string& n) {
+    return n.find("does not earn its place") != std::string::npos;
+  })) << why;
+}
+
 TEST(GapPairs, LoadTransferWithSpeedFrictionIsJudgedOnAllRuns) {
   // The referee's ground pair 3 (generator B, seed 1): load transfer with speed friction. Held
   // out, a fold fitted on two of the three runs trades the tyre's shape for the load and misses
