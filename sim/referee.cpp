@@ -5,7 +5,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <string_view>
 
 #include "core/identify.hpp"
 #include "core/pipeline/event_csv.hpp"
@@ -95,13 +97,26 @@ bool TrialResult::exact() const {
 
 namespace {
 
-/// The diagnosis said `said` and noted that the data cannot separate it from `effect`.
+/// The diagnosis said `said` and noted that the data cannot separate it from `effect`: the two
+/// names of "cannot separate X from Y" (a note may name a third effect after them, the partner
+/// both were fitted beside, which it ties to neither).
 bool inseparable(const std::vector<std::string>& notes, const std::string& said,
                  const std::string& effect) {
-  for (const auto& n : notes)
-    if (n.find("cannot separate") != std::string::npos && n.find(said) != std::string::npos &&
-        n.find(effect) != std::string::npos)
-      return true;
+  static constexpr std::string_view kHead = "cannot separate ", kFrom = " from ";
+  const auto name_at = [](const std::string& n, std::size_t at) {
+    std::size_t end = at;
+    while (end < n.size() && (std::islower(static_cast<unsigned char>(n[end])) || n[end] == '_'))
+      ++end;
+    return n.substr(at, end - at);
+  };
+  for (const auto& n : notes) {
+    const std::size_t head = n.find(kHead);
+    if (head == std::string::npos) continue;
+    const std::string x = name_at(n, head + kHead.size());
+    if (n.compare(head + kHead.size() + x.size(), kFrom.size(), kFrom) != 0) continue;
+    const std::string y = name_at(n, head + kHead.size() + x.size() + kFrom.size());
+    if ((x == said && y == effect) || (x == effect && y == said)) return true;
+  }
   return false;
 }
 

@@ -192,6 +192,7 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
           : vetoed ? "each alone bends the curve against the other, and what passed alone left "
                      "most of the gap (the fit-quality check would name nothing)"
                    : "one effect at a time, the first took part of its partner's bend"));
+      for (std::string& n : p->notes) rep.notes.push_back(std::move(n));
       sel.restore_entry_runs();
       sel.chosen = p->model;
       sel.fit = std::move(p->fit);

@@ -246,6 +246,9 @@ struct PairFound {
   EffectScore a, b;                             ///< the members, at the pair fit's values
   double in_sample_n = 0.0;                     ///< the pair's RMS residual on all runs
   bool in_sample = false;  ///< judged in-sample (a load-transfer pair): gains are in-sample
+  /// "cannot separate" notes: a member another candidate replaces beside the same partner, the
+  /// pair still passing and its gain within the separability share.
+  std::vector<std::string> notes;
 };
 /// When forward selection leaves a structured gap (left_n): every pair of round 1's candidates,
 /// lag and delay never together, fitted jointly. Of those with both members inside their
