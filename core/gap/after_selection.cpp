@@ -254,10 +254,11 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
              100 * (1 - sel.heldout_n / std::max(rep.gap_before_rmse_n, 1e-12))),
          "passed, but the baseline's gap is within the noise floor (see the notes)");
   // Each named effect against a fade with the energy slid (fade_rival.cpp): where the fade,
-  // outside the catalogue, in an effect's place explains the runs far better, nothing is named.
+  // outside the catalogue, in an effect's place explains the runs better (held out, by half),
+  // nothing is named.
   if (auto note = fade_rival(sel.runs, sel.chosen, sel.fit, sel.heldout_n, fit))
     veto(std::move(*note),
-         "passed, but a friction fading with the energy slid explains the runs far better "
+         "passed, but a friction fading with the energy slid explains the runs better "
          "(see the notes)");
   rep.accepted = sel.chosen;
   rep.after = sel.fit;

@@ -49,7 +49,7 @@ enum class Effect {
   TyreShift,
   /// Not a candidate and never named: each named effect's rival, a friction fading with the
   /// energy the tyre slid so far in the run (outside the catalogue; fade_rival.cpp). Where it
-  /// explains the runs far better in an effect's place, nothing is named.
+  /// explains the runs better in an effect's place, nothing is named.
   FrictionFade
 };
 inline constexpr std::array<Effect, 8> kAllEffects = {
