@@ -109,8 +109,8 @@ TEST(FadeRival, AFadeNamedWithLoadTransferIsWeighedOnEveryRunAlike) {
   // at 30-70 km/h. Load transfer with speed friction passes as a pair judged in-sample; the fade
   // in speed friction's place, on the same points with one parameter as well, leaves less.
   const gap::Options o = gap::calibrated_options(gap::Condition::Ground);
-  const auto t = sim::run_trial(sim::draw_outside(13, gap::Condition::Ground),
-                                sim::outside_seed(13), o);
+  const auto t =
+      sim::run_trial(sim::draw_outside(13, gap::Condition::Ground), sim::outside_seed(13), o);
   EXPECT_FALSE(names(t, "speed_friction")) << test::why_of(t);
   EXPECT_FALSE(names(t, "load_transfer")) << test::why_of(t);
   ASSERT_FALSE(t.verdict.empty());
