@@ -146,7 +146,6 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // heavy wheel under load transfer named with a pressure lag, its inertia 0.68 for 0.86 kg m^2
   // and 18 N left held out; the right pair leaves 16 N): the pair replaces them only where it
   // does better by the gain gate.
-  bool pair_in_sample = false;  // a load-transfer pair judged on all runs (no fold held out)
   if (named_effects(sel.chosen).size() <= 2 && sel.heldout_n > o.noise_factor * rep.noise_n) {
     // The runs round 1 scored.
     std::vector<Run>& entry = sel.entry_runs ? *sel.entry_runs : sel.runs;
@@ -161,7 +160,6 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
                          sel.heldout_n, rep.before, fit, rep.noise_n,
                          nothing_named ? std::optional(in_sample_rms(sel.fit)) : std::nullopt, o)) {
       const std::string before_names = sel.named();
-      pair_in_sample = p->in_sample;
       for (auto& e : rep.effects)
         if (e.accepted) {
           e.accepted = false;
@@ -258,7 +256,8 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
   // Each named effect against a fade with the energy slid (fade_rival.cpp): where the fade,
   // outside the catalogue, in an effect's place explains the runs better (held out, by half),
   // nothing is named.
-  if (auto note = fade_rival(sel.runs, sel.chosen, sel.fit, sel.heldout_n, pair_in_sample, fit))
+  if (auto note =
+          fade_rival(sel.runs, sel.chosen, sel.fit, sel.heldout_n, rep.gap_before_rmse_n, fit))
     veto(std::move(*note),
          "passed, but a friction fading with the energy slid explains the runs better "
          "(see the notes)");

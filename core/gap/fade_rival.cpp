@@ -51,7 +51,7 @@ std::vector<double> slid_energy_kj(const Run& r) {
 
 std::optional<std::string> fade_rival(const std::vector<Run>& runs,
                                       const std::vector<Effect>& chosen, const Fit& current,
-                                      double current_heldout_n, bool pair_in_sample,
+                                      double current_heldout_n, double gap_before_n,
                                       const Fitter& fit) {
   // Beside load transfer the model was judged on every run at once (one run left out, load
   // transfer's fold trades the tyre's shape for the load): the fade is compared the same way.
@@ -66,12 +66,13 @@ std::optional<std::string> fade_rival(const std::vector<Run>& runs,
     const double k_per_kj = all.params.at(*param_offset(model, Effect::FrictionFade));
     // Held out, beside a second effect the fade often fits about as well (the other effect takes
     // up the difference), so a tie is no evidence against the effect; only a fade that leaves
-    // under half of what the effect leaves is a better account of the runs. Where the pair was
-    // chosen in-sample (B's fading tyres named load transfer with speed friction, the fade
-    // leaving 0.64-0.95 of what speed friction left) it is judged as it was chosen: the fade that
-    // leaves less and fades is. (A pair chosen held out keeps the held-out margin: B's load
-    // transfer named with a heavy wheel, where a 3 % fade fitted 5 % closer in-sample.)
-    const bool like_for_like = in_sample && pair_in_sample;
+    // under half of what the effect leaves is a better account of the runs. Where held out the
+    // model does no better than none, its only support is in-sample (B's fading tyres named load
+    // transfer with speed friction, the fade leaving 0.64-0.95 of what speed friction left), and
+    // there the fade is judged like for like: the fade that leaves less and fades is. (A model
+    // that does better held out keeps the held-out margin: B's load transfer named with a heavy
+    // wheel, where a 3 % fade fitted 5 % closer in-sample.)
+    const bool like_for_like = in_sample && current_heldout_n >= gap_before_n;
     const double margin = like_for_like ? 1.0 : kFadeMargin;
     if (rival_n * margin >= current_n ||
         (like_for_like && faded_share(runs, k_per_kj) < kFadeMinShare))

@@ -353,12 +353,12 @@ std::vector<double> slid_energy_kj(const Run& r);
 /// For each effect the chosen model names (not load transfer): the fade (a friction fading with
 /// the energy slid, outside the catalogue) fitted in its place; for the first where it leaves
 /// under half of what the chosen model leaves (held out; in-sample beside load transfer), or,
-/// where the model was chosen in-sample (pair_in_sample: a load-transfer pair judged on all
-/// runs), less with the fade taking at least 1 % of the friction, the note saying so: the runs
-/// then follow the energy slid, and nothing is named.
+/// beside load transfer where held out the model does no better than the baseline
+/// (gap_before_n), less with the fade taking at least 1 % of the friction, the note saying so:
+/// the runs then follow the energy slid, and nothing is named.
 std::optional<std::string> fade_rival(const std::vector<Run>& runs,
                                       const std::vector<Effect>& chosen, const Fit& current,
-                                      double current_heldout_n, bool pair_in_sample,
+                                      double current_heldout_n, double gap_before_n,
                                       const Fitter& fit);
 
 }  // namespace brakefit::gap

@@ -118,7 +118,7 @@ TEST(FadeRival, AFadeNamedWithLoadTransferIsWeighedOnEveryRunAlike) {
   EXPECT_TRUE(fade_note(t));
 }
 
-TEST(FadeRival, APairChosenHeldOutKeepsTheHeldOutMargin) {
+TEST(FadeRival, AModelThatDoesBetterHeldOutKeepsTheHeldOutMargin) {
   // The referee's ground trial 22 (generator B, seed 1): load transfer (0.049 per m/s^2, the
   // body's 1.34 Hz pitch mode), named with a wheel inertia as a pair judged held out. In-sample
   // a 3 % fade in the inertia's place fits 5 % closer: no better account by the margin the pair
