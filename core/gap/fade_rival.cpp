@@ -26,12 +26,12 @@ constexpr double kFadeMargin = 2.0;
 // 0.001; B's fading tyres named with load transfer, 0.04-0.17.
 constexpr double kFadeMinShare = 0.01;
 
-/// The share of the friction the fade takes by the end of the run that slid most, k E / (1 + k E).
-double faded_share(const std::vector<Run>& runs, double k_per_kj) {
+/// The most energy any run slid by its end, kJ.
+double most_slid_kj(const std::vector<Run>& runs) {
   double e_kj = 0;
   for (const Run& r : runs)
     if (const auto e = slid_energy_kj(r); !e.empty()) e_kj = std::max(e_kj, e.back());
-  return k_per_kj * e_kj / (1.0 + k_per_kj * e_kj);
+  return e_kj;
 }
 }  // namespace
 
@@ -56,6 +56,13 @@ std::optional<std::string> fade_rival(const std::vector<Run>& runs,
   // Beside load transfer the model was judged on every run at once (one run left out, load
   // transfer's fold trades the tyre's shape for the load): the fade is compared the same way.
   const bool in_sample = std::any_of(chosen.begin(), chosen.end(), is_load_transfer);
+  // Where held out the model does no better than none, its only support is in-sample (B's
+  // fading tyres named load transfer with speed friction), and there the fade is judged like for
+  // like: the fade that leaves less and fades is. (A model that does better held out keeps the
+  // held-out margin: B's load transfer named with a heavy wheel, where a 3 % fade fitted 5 %
+  // closer in-sample.)
+  const bool like_for_like = in_sample && current_heldout_n >= gap_before_n;
+  const double e_kj = like_for_like ? most_slid_kj(runs) : 0.0;
   const double current_n = in_sample ? in_sample_rms(current) : current_heldout_n;
   for (const Effect e : named_effects(chosen)) {
     if (is_load_transfer(e)) continue;  // its four parameters reshape the curve: no like-for-like
@@ -66,17 +73,10 @@ std::optional<std::string> fade_rival(const std::vector<Run>& runs,
     const double k_per_kj = all.params.at(*param_offset(model, Effect::FrictionFade));
     // Held out, beside a second effect the fade often fits about as well (the other effect takes
     // up the difference), so a tie is no evidence against the effect; only a fade that leaves
-    // under half of what the effect leaves is a better account of the runs. Where held out the
-    // model does no better than none, its only support is in-sample (B's fading tyres named load
-    // transfer with speed friction, the fade leaving 0.64-0.95 of what speed friction left), and
-    // there the fade is judged like for like: the fade that leaves less and fades is. (A model
-    // that does better held out keeps the held-out margin: B's load transfer named with a heavy
-    // wheel, where a 3 % fade fitted 5 % closer in-sample.)
-    const bool like_for_like = in_sample && current_heldout_n >= gap_before_n;
+    // under half of what the effect leaves is a better account of the runs.
+    const double faded_share = k_per_kj * e_kj / (1.0 + k_per_kj * e_kj);  // k E / (1 + k E)
     const double margin = like_for_like ? 1.0 : kFadeMargin;
-    if (rival_n * margin >= current_n ||
-        (like_for_like && faded_share(runs, k_per_kj) < kFadeMinShare))
-      continue;
+    if (rival_n * margin >= current_n || (like_for_like && faded_share < kFadeMinShare)) continue;
     return fmt::format(
         "the model naming {} leaves {:.1f} N {}, but a friction fading with the energy the tyre "
         "slid so far (mu / (1 + k E), k = {:.3g} per kJ, outside the catalogue) leaves {:.1f} N "
@@ -84,7 +84,7 @@ std::optional<std::string> fade_rival(const std::vector<Run>& runs,
         to_string(e), current_n, in_sample ? "in-sample" : "held out", k_per_kj, rival_n,
         like_for_like ? fmt::format("less, on the same points with one parameter each; the fade "
                                     "takes {:.0f} % of the friction by the most any run slid",
-                                    100 * faded_share(runs, k_per_kj))
+                                    100 * faded_share)
                       : fmt::format("under 1/{:g}", kFadeMargin));
   }
   return std::nullopt;
