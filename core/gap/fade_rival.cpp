@@ -62,10 +62,15 @@ std::optional<std::string> fade_rival(const std::vector<Run>& runs,
   // held-out margin: B's load transfer named with a heavy wheel, where a 3 % fade fitted 5 %
   // closer in-sample.)
   const bool like_for_like = in_sample && current_heldout_n >= gap_before_n;
-  const double e_kj = like_for_like ? most_slid_kj(runs) : 0.0;
+  const double e_kj = in_sample ? most_slid_kj(runs) : 0.0;
   const double current_n = in_sample ? in_sample_rms(current) : current_heldout_n;
   for (const Effect e : named_effects(chosen)) {
-    if (is_load_transfer(e)) continue;  // its four parameters reshape the curve: no like-for-like
+    // Load transfer itself is always judged like for like, whatever held out said: its four
+    // parameters against the fade's one on the same points, a fade that leaves less in its place
+    // is the better account by any count of parameters (B's fading tyres named load transfer
+    // with speed friction, where the friction's model did better held out than none).
+    const bool against_fewer = is_load_transfer(e);
+    const bool alike = like_for_like || against_fewer;
     std::vector<Effect> model = chosen;
     std::replace(model.begin(), model.end(), e, Effect::FrictionFade);
     const Fit all = fit(pointers(runs), model);
@@ -75,17 +80,19 @@ std::optional<std::string> fade_rival(const std::vector<Run>& runs,
     // up the difference), so a tie is no evidence against the effect; only a fade that leaves
     // under half of what the effect leaves is a better account of the runs.
     const double faded_share = k_per_kj * e_kj / (1.0 + k_per_kj * e_kj);  // k E / (1 + k E)
-    const double margin = like_for_like ? 1.0 : kFadeMargin;
-    if (rival_n * margin >= current_n || (like_for_like && faded_share < kFadeMinShare)) continue;
+    const double margin = alike ? 1.0 : kFadeMargin;
+    if (rival_n * margin >= current_n || (alike && faded_share < kFadeMinShare)) continue;
     return fmt::format(
         "the model naming {} leaves {:.1f} N {}, but a friction fading with the energy the tyre "
         "slid so far (mu / (1 + k E), k = {:.3g} per kJ, outside the catalogue) leaves {:.1f} N "
         "in its place ({}): the runs follow the energy slid better, so nothing is named",
         to_string(e), current_n, in_sample ? "in-sample" : "held out", k_per_kj, rival_n,
-        like_for_like ? fmt::format("less, on the same points with one parameter each; the fade "
-                                    "takes {:.0f} % of the friction by the most any run slid",
-                                    100 * faded_share)
-                      : fmt::format("under 1/{:g}", kFadeMargin));
+        alike ? fmt::format("less, on the same points with {}; the fade takes {:.0f} % of the "
+                            "friction by the most any run slid",
+                            against_fewer ? "one parameter against load transfer's four"
+                                          : "one parameter each",
+                            100 * faded_share)
+              : fmt::format("under 1/{:g}", kFadeMargin));
   }
   return std::nullopt;
 }
