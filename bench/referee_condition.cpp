@@ -301,6 +301,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
                                  cname, k, fmt::join(r.verdict, ", "),
                                  r.gap_before_n / std::max(r.noise_n, 1e-9));
         for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
+        if (st.why > 1)
+          for (const auto& line : r.scores) std::cerr << "    " << line << "\n";
       }
     }
     j["misspecified_trials"] = st.misspecified;

@@ -253,6 +253,14 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
              to_string(named_effects(sel.chosen).front()),
              100 * (1 - sel.heldout_n / std::max(rep.gap_before_rmse_n, 1e-12))),
          "passed, but the baseline's gap is within the noise floor (see the notes)");
+  // The selection refuses an effect that explains the runs only at the end of a parameter's
+  // physical range; the model as finally fitted (refitted beside the effects named after it, on
+  // the runs as last conditioned: a ripple estimated again from its residual) is held to the
+  // same rule.
+  if (auto note = named_at_range_end(sel.chosen, sel.fit))
+    veto(std::move(*note),
+         "passed, but the model as named puts a parameter at the end of its range (see the "
+         "notes)");
   // Each named effect against a fade with the energy slid (fade_rival.cpp): where the fade,
   // outside the catalogue, in an effect's place explains the runs better (held out, by half),
   // nothing is named.

@@ -1,7 +1,11 @@
 // The gates a candidate passes to be named (calibrated per condition on null sets), what a
 // parameter at its range's end is, and whether a fit leaves structure the gates must not name.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
@@ -51,6 +55,21 @@ std::optional<std::size_t> param_at_bound(const std::vector<Effect>& model, Effe
   const auto eps = effect_params(e);
   for (std::size_t j = 0; at && j < eps.size(); ++j)
     if (at_bound(f.params.at(*at + j), eps[j])) return j;
+  return std::nullopt;
+}
+
+std::optional<std::string> named_at_range_end(const std::vector<Effect>& model, const Fit& f) {
+  std::vector<std::string> names;
+  for (Effect e : named_effects(model)) names.emplace_back(to_string(e));
+  for (Effect e : named_effects(model)) {
+    const auto j = param_at_bound(model, e, f);
+    if (!j) continue;
+    return fmt::format(
+        "the model naming {} explains the runs only with {}'s {} at the end of its physical "
+        "range ({:.4g}) once fitted as named: not a physical account, so no effect is named",
+        fmt::join(names, ", "), to_string(e), effect_params(e)[*j].name,
+        f.params.at(*param_offset(model, e) + *j));
+  }
   return std::nullopt;
 }
 

@@ -179,7 +179,9 @@ struct Selection {
 /// The checks on what forward selection named (after_selection.cpp), in order: a lag or delay
 /// swapped for its twin, an effect the later ones make needless, a pair neither explains alone, a
 /// threshold beside a slip offset fitted below the wheel's rest, the fit-quality and noise-floor
-/// vetoes. Fills rep.accepted, after, gap_after_rmse_n, the joint estimates and the verdict.
+/// vetoes, a parameter the model as named puts at the end of its range, and a fade in an
+/// effect's place. Fills rep.accepted, after, gap_after_rmse_n, the joint estimates and the
+/// verdict.
 void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Options& o);
 
 /// A time offset or relaxation (e, scored on runs against the model `current`) that a drooping
@@ -229,6 +231,10 @@ bool at_bound(double v, const EffectParam& p);
 /// The first of effect e's parameters that its fit f (of model) left at the end of its range:
 /// its index among effect_params(e) (none: all inside, or e not in the model).
 std::optional<std::size_t> param_at_bound(const std::vector<Effect>& model, Effect e, const Fit& f);
+/// Where model's fit f puts a named effect's parameter at the end of its physical range (the
+/// rule the selection names each effect by, held to the model as finally fitted): the note
+/// saying so.
+std::optional<std::string> named_at_range_end(const std::vector<Effect>& model, const Fit& f);
 
 /// A fit's RMS residual over every point it was fitted to (in-sample).
 inline double in_sample_rms(const Fit& f) {
