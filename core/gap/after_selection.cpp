@@ -254,9 +254,9 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
              100 * (1 - sel.heldout_n / std::max(rep.gap_before_rmse_n, 1e-12))),
          "passed, but the baseline's gap is within the noise floor (see the notes)");
   // The selection refuses an effect that explains the runs only at the end of a parameter's
-  // physical range; the model as finally fitted (refitted beside the effects named after it, on
-  // the runs as last conditioned: a ripple estimated again from its residual) is held to the
-  // same rule.
+  // physical range; the model as the checks above leave it (refitted beside the effects named
+  // after it) is held to the same rule (and again once the ripple is estimated against it,
+  // ripple_against_effects.cpp).
   if (auto note = named_at_range_end(sel.chosen, sel.fit))
     veto(std::move(*note),
          "passed, but the model as named puts a parameter at the end of its range (see the "
