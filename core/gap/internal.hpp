@@ -228,9 +228,18 @@ bool nibbled_alike(double first_gain, double rival_gain, double before_n, double
 
 /// A parameter at the end of its physical range (a lower end that is physical, a lag of 0, aside).
 bool at_bound(double v, const EffectParam& p);
+/// A load's pitch mode of 1 / (2 pi sqrt(m)) Hz at this m or more is a body's (5 Hz or slower)...
+inline constexpr double kBodyPitchModeMinS2 = 1.0e-3;
+/// ...and damped at least this share of critical (lag / (2 sqrt(m))); less is a lag at the end of
+/// the range a vehicle's dampers allow.
+inline constexpr double kPitchMinDamping = 0.05;
 /// The first of effect e's parameters that its fit f (of model) left at the end of its range:
 /// its index among effect_params(e) (none: all inside, or e not in the model).
 std::optional<std::size_t> param_at_bound(const std::vector<Effect>& model, Effect e, const Fit& f);
+/// Where e is a load transfer whose fit f (of model) has a body's pitch mode damped under
+/// kPitchMinDamping: its lag's index (the end of the range a vehicle's dampers allow). The
+/// selection refuses such a candidate; param_at_bound and named_at_range_end do not ask it.
+std::optional<std::size_t> undamped_pitch(const std::vector<Effect>& model, Effect e, const Fit& f);
 /// Where model's fit f puts a named effect's parameter at the end of its physical range (the
 /// rule the selection names each effect by, held to the model as finally fitted): the note
 /// saying so.

@@ -202,6 +202,18 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
             eps[j].name, v));
         e.decision = fmt::format("{} at the end of its physical range ({:.4g})", eps[j].name, v);
       }
+      if (const auto j = undamped_pitch(models[order[k]], e.effect, fits[order[k]]);
+          inside && j) {
+        inside = false;
+        rep.notes.push_back(fmt::format(
+            "{}{} would explain part of the residual only with {} at the end of its physical "
+            "range ({:.4g}, a body's pitch mode undamped): not accepted",
+            to_string(e.effect),
+            round == 0 ? "" : fmt::format(" (round {}, after {})", round + 1, sel.named()),
+            eps[*j].name, e.params[*j].second));
+        e.decision = fmt::format("{} at the end of its physical range ({:.4g}, undamped)",
+                                 eps[*j].name, e.params[*j].second);
+      }
       // The effects named before it, refitted beside it, stay inside their ranges too: a joint
       // fit that pushes one of them to its end (load transfer's stiffness ratio to 0 beside a
       // threshold, where a time offset was the cause) trades that effect's law for the new one.

@@ -1,9 +1,12 @@
 // The selection's rule held to the model as finally fitted (gates.cpp named_at_range_end): a
 // named effect whose parameter the final fit puts at the end of its physical range is no
-// physical account, and nothing is named.
+// physical account, and nothing is named. A body pitching undamped is at its lag's end (the
+// selection's candidate rule, undamped_pitch).
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -40,6 +43,26 @@ TEST(RangeEnd, AStiffnessRatioAtItsEndIsNoPhysicalAccount) {
   EXPECT_FALSE(gap::named_at_range_end(model, at_once).has_value());
 }
 
+TEST(RangeEnd, ABodyPitchingUndampedIsAtTheEndOfItsLag) {
+  // The load through a body's pitch mode at 0.76 Hz (m = 1 / (2 pi 0.76)^2 s^2).
+  const std::vector<gap::Effect> model{gap::Effect::LoadTransfer};
+  const double mode_s2 = 1.0 / std::pow(2.0 * std::numbers::pi * 0.76, 2);
+  gap::Fit f = load_transfer_fit(1.25);
+  f.params[7] = mode_s2;
+  f.params[6] = 0.0;  // damping 0: no vehicle's body swings so
+  EXPECT_EQ(gap::undamped_pitch(model, gap::Effect::LoadTransfer, f), std::size_t{2});
+  f.params[6] = 2.0 * 0.04 * std::sqrt(mode_s2);  // 4 % of critical
+  EXPECT_EQ(gap::undamped_pitch(model, gap::Effect::LoadTransfer, f), std::size_t{2});
+  f.params[6] = 2.0 * 0.3 * std::sqrt(mode_s2);  // a car's damper: 30 % of critical
+  EXPECT_FALSE(gap::undamped_pitch(model, gap::Effect::LoadTransfer, f).has_value());
+  // A mode faster than a body's (20 Hz) without damping follows the deceleration at once.
+  f.params[7] = 1.0 / std::pow(2.0 * std::numbers::pi * 20.0, 2);
+  f.params[6] = 0.0;
+  EXPECT_FALSE(gap::undamped_pitch(model, gap::Effect::LoadTransfer, f).has_value());
+  // Another effect's parameters are no pitch.
+  EXPECT_FALSE(gap::undamped_pitch(model, gap::Effect::WheelInertia, f).has_value());
+}
+
 TEST(RangeEnd, NuisanceTermsAreNotNamedEffects) {
   // The reference's slip bias on its bound is the quantisation's, not an effect's law.
   const std::vector<gap::Effect> model{gap::Effect::ReferenceBias};
@@ -61,4 +84,18 @@ TEST(RangeEnd, ABurckhardtTyreOnTheGroundIsNotNamedLoadTransfer) {
   ASSERT_FALSE(t.verdict.empty());
   EXPECT_TRUE(t.verdict.front() == "none" || t.verdict.front() == "unexplained") << test::why_of(t);
   EXPECT_EQ(std::find(t.verdict.begin(), t.verdict.end(), "load_transfer"), t.verdict.end());
+}
+
+TEST(RangeEnd, AFadingTyreIsNotALoadPitchingUndamped) {
+  // Generator B's ground outside set 7 from every export: a fading tyre (1/(1 + 0.26 per m slid))
+  // on two runs at 76-126 km/h, 200 Hz. Load transfer alone fitted it in-sample better than the
+  // fade in its place, with the load swinging through a 0.76 Hz mode at damping 0.
+  const test::EveryExport every;
+  const auto t = sim::run_trial(sim::draw_outside(7, gap::Condition::Ground),
+                                sim::outside_seed(7), test::every_export_ground_gates());
+  ASSERT_FALSE(t.verdict.empty());
+  EXPECT_EQ(std::find(t.verdict.begin(), t.verdict.end(), "load_transfer"), t.verdict.end())
+      << test::why_of(t);
+  EXPECT_TRUE(t.verdict.front() == "unexplained" || t.verdict.front() == "none")
+      << test::why_of(t);
 }
