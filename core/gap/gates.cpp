@@ -78,6 +78,7 @@ std::optional<std::size_t> undamped_pitch(const std::vector<Effect>& model, Effe
 std::optional<std::string> named_at_range_end(const std::vector<Effect>& model, const Fit& f) {
   const std::vector<Effect> named = named_effects(model);
   std::vector<std::string> names;
+  names.reserve(named.size());
   for (Effect e : named) names.emplace_back(to_string(e));
   for (Effect e : named) {
     const auto j = param_at_bound(model, e, f);

@@ -190,29 +190,26 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       if (!passes(e)) break;  // sorted by gain: the rest do not pass the gain gate either
       const auto eps = effect_params(e.effect);
       bool inside = true;
-      for (std::size_t j = 0; j < eps.size() && inside; ++j) {
-        const double v = e.params[j].second;
-        if (!at_bound(v, eps[j])) continue;
-        inside = false;
-        rep.notes.push_back(fmt::format(
-            "{}{} would explain part of the residual only with {} at the end of its physical "
-            "range ({:.4g}): not accepted",
-            to_string(e.effect),
-            round == 0 ? "" : fmt::format(" (round {}, after {})", round + 1, sel.named()),
-            eps[j].name, v));
-        e.decision = fmt::format("{} at the end of its physical range ({:.4g})", eps[j].name, v);
+      std::optional<std::size_t> end;
+      for (std::size_t j = 0; j < eps.size() && !end; ++j)
+        if (at_bound(e.params[j].second, eps[j])) end = j;
+      bool undamped = false;
+      if (!end) {
+        end = undamped_pitch(models[order[k]], e.effect, fits[order[k]]);
+        undamped = end.has_value();
       }
-      if (const auto j = undamped_pitch(models[order[k]], e.effect, fits[order[k]]);
-          inside && j) {
+      if (end) {
         inside = false;
+        const double v = e.params[*end].second;
+        const char* why = undamped ? ", a body's pitch mode undamped" : "";
         rep.notes.push_back(fmt::format(
             "{}{} would explain part of the residual only with {} at the end of its physical "
-            "range ({:.4g}, a body's pitch mode undamped): not accepted",
+            "range ({:.4g}{}): not accepted",
             to_string(e.effect),
             round == 0 ? "" : fmt::format(" (round {}, after {})", round + 1, sel.named()),
-            eps[*j].name, e.params[*j].second));
-        e.decision = fmt::format("{} at the end of its physical range ({:.4g}, undamped)",
-                                 eps[*j].name, e.params[*j].second);
+            eps[*end].name, v, why));
+        e.decision =
+            fmt::format("{} at the end of its physical range ({:.4g}{})", eps[*end].name, v, why);
       }
       // The effects named before it, refitted beside it, stay inside their ranges too: a joint
       // fit that pushes one of them to its end (load transfer's stiffness ratio to 0 beside a
