@@ -5,6 +5,7 @@
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
+#include "core/gap/warm_fit.hpp"
 
 namespace brakefit::gap {
 
@@ -143,6 +144,16 @@ std::optional<CapEvidence> cap_behind_lag(const Report& rep, const std::vector<R
 
 /// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole
 /// runs' (gap_whole_n), after the gap below the cap (rep's baseline gap so far).
+double cap_peak_beside_named(const Report& rep, const std::vector<Run>& runs) {
+  // A threshold or a slip offset bends a sharp peak's curve fitted from zero slip off the tyre's
+  // (a truck's 0.2 bar threshold: the curve without it peaked past the runaway); with them in,
+  // the curve's peak is read again.
+  if (!std::isfinite(rep.cap_n) || param_offset(rep.accepted, Effect::CradleCap) ||
+      named_effects(rep.accepted).empty() || rep.after.params.size() != param_count(rep.accepted))
+    return NAN;
+  return fit_runs_from(pointers(runs), rep.accepted, rep.after.params).params[2] / rep.cap_n;
+}
+
 void put_cap_first(Report& rep, double cap_n, double gap_whole_n) {
   rep.cap_n = cap_n;
   EffectScore c;

@@ -35,12 +35,14 @@ std::string short_runs_note(const std::vector<Run>& runs) {
 }
 
 /// The diagnosis; behind_lag: a cap seen behind a lag (cap_behind_lag), each run cut below its
-/// own runaway.
+/// own runaway; seek_cap false: no cap is read from how the runs end.
 Report diagnose_runs(const std::vector<Run>& runs_in, const MfParams& start, const Options& o,
-                     const std::optional<CapEvidence>& behind_lag) {
+                     const std::optional<CapEvidence>& behind_lag, bool seek_cap = true) {
   // A force cap (a two-roller cradle): the runs end in a runaway at the cap; the samples from 98 %
   // of the cap on are that runaway, not the tyre, and are left out.
-  auto cap = behind_lag ? behind_lag : cradle_cap_evidence(runs_in);
+  auto cap = behind_lag ? behind_lag
+             : seek_cap ? cradle_cap_evidence(runs_in)
+                        : std::nullopt;
   std::string cap_at_peak;
   if (cap && !behind_lag && cap_at_fitted_peak(*cap, runs_in, start)) {
     cap_at_peak = fmt::format(
@@ -236,6 +238,26 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
         "to)");
   Report rep = diagnose_runs(runs_in, start, o, std::nullopt);
+  // A cap read from how the runs end, beside effects whose curve, fitted with them to the whole
+  // runs, peaks at the runaway: the tyre's own sharp peak (a truck's, bent by a threshold or a
+  // slip offset when fitted without them) and a cap cannot be told apart. The runs are diagnosed
+  // again without a cap, and that is kept where it names the same effects and leaves nothing
+  // unexplained.
+  if (const double ratio = cap_peak_beside_named(rep, runs_in); ratio <= kCapAtPeakRatio) {
+    Report uncapped = diagnose_runs(runs_in, start, o, std::nullopt, false);
+    const auto& v = uncapped.verdict;
+    if (named_effects(rep.accepted) == named_effects(uncapped.accepted) &&
+        std::find(v.begin(), v.end(), "unexplained") == v.end()) {
+      uncapped.notes.insert(
+          uncapped.notes.begin(),
+          fmt::format("every run ran away at {:.0f} N with its force still rising, as at a "
+                      "cradle's cap, but the curve fitted to the whole runs with {} peaks there "
+                      "({:.3f}x that force): the tyre's own sharp peak and a cap at the peak "
+                      "cannot be told apart on these runs, so no cap is named",
+                      rep.cap_n, fmt::join(v, ", "), ratio));
+      return uncapped;
+    }
+  }
   // A late channel moves where each run reads its runaway: a cap is looked for again behind the
   // time offset named, and kept where the runs below it name the offset too and leave nothing
   // unexplained.

@@ -23,6 +23,10 @@ inline constexpr double kCapMaxSpread = 0.03;
 /// force once each is read dt earlier (a late channel reads a fast ramp's runaway lower), and the
 /// curve fitted with the offset peaks above it (kCapAtPeakRatio).
 std::optional<CapEvidence> cap_behind_lag(const Report& rep, const std::vector<Run>& runs);
+/// A cap read from how the runs end, with effects named beside it: the peak of the curve fitted
+/// to the whole runs with those effects over the cap (NaN where rep has no such cap). At most
+/// kCapAtPeakRatio, the tyre's own peak explains the runaway once the effects are in.
+double cap_peak_beside_named(const Report& rep, const std::vector<Run>& runs);
 /// The smallest over the runs of that slope ratio at cap_n (NaN where a run has too few points
 /// in either band to say).
 double cap_kink_ratio(const std::vector<Run>& runs, double cap_n);
