@@ -40,9 +40,7 @@ Report diagnose_runs(const std::vector<Run>& runs_in, const MfParams& start, con
                      const std::optional<CapEvidence>& behind_lag, bool seek_cap = true) {
   // A force cap (a two-roller cradle): the runs end in a runaway at the cap; the samples from 98 %
   // of the cap on are that runaway, not the tyre, and are left out.
-  auto cap = behind_lag ? behind_lag
-             : seek_cap ? cradle_cap_evidence(runs_in)
-                        : std::nullopt;
+  auto cap = behind_lag ? behind_lag : seek_cap ? cradle_cap_evidence(runs_in) : std::nullopt;
   std::string cap_at_peak;
   if (cap && !behind_lag && cap_at_fitted_peak(*cap, runs_in, start)) {
     cap_at_peak = fmt::format(
