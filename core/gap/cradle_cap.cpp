@@ -142,8 +142,6 @@ std::optional<CapEvidence> cap_behind_lag(const Report& rep, const std::vector<R
   return e;
 }
 
-/// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole
-/// runs' (gap_whole_n), after the gap below the cap (rep's baseline gap so far).
 double cap_peak_beside_named(const Report& rep, const std::vector<Run>& runs) {
   // A threshold or a slip offset bends a sharp peak's curve fitted from zero slip off the tyre's
   // (a truck's 0.2 bar threshold: the curve without it peaked past the runaway); with them in,
@@ -154,6 +152,8 @@ double cap_peak_beside_named(const Report& rep, const std::vector<Run>& runs) {
   return fit_runs_from(pointers(runs), rep.accepted, rep.after.params).params[2] / rep.cap_n;
 }
 
+/// A cradle cap found on the runs (not fitted) goes first: its held-out gap before is the whole
+/// runs' (gap_whole_n), after the gap below the cap (rep's baseline gap so far).
 void put_cap_first(Report& rep, double cap_n, double gap_whole_n) {
   rep.cap_n = cap_n;
   EffectScore c;

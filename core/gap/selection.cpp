@@ -189,7 +189,6 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       EffectScore& e = scores[order[k]];
       if (!passes(e)) break;  // sorted by gain: the rest do not pass the gain gate either
       const auto eps = effect_params(e.effect);
-      bool inside = true;
       std::optional<std::size_t> end;
       for (std::size_t j = 0; j < eps.size() && !end; ++j)
         if (at_bound(e.params[j].second, eps[j])) end = j;
@@ -198,8 +197,8 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
         end = undamped_pitch(models[order[k]], e.effect, fits[order[k]]);
         undamped = end.has_value();
       }
+      bool inside = !end.has_value();
       if (end) {
-        inside = false;
         const double v = e.params[*end].second;
         const char* why = undamped ? ", a body's pitch mode undamped" : "";
         rep.notes.push_back(fmt::format(
