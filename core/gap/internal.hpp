@@ -96,6 +96,20 @@ inline constexpr std::size_t kTwoRunBlocks = 3;
 /// fold (one run per fold up to kMaxFolds runs, blocks of consecutive runs past that; of two runs,
 /// each run's kTwoRunBlocks blocks of points, the rest of both runs fitted).
 double heldout(const std::vector<Run>& runs, const std::vector<Effect>& effects, const Fitter& fit);
+/// The held-out gain over a roller's decelerating samples that names a wheel's inertia whose
+/// gain over all samples is diluted (generator B's every-export null sets: up to 0.29).
+inline constexpr double kInertiaDecelGain = 0.4;
+/// A wheel's inertia on a roller whose held-out gain over all samples is diluted: its evidence
+/// where the wheel decelerates (inertia_decel.cpp), in words, or nothing.
+std::optional<std::string> inertia_in_deceleration(const std::vector<Run>& runs,
+                                                   const std::vector<Effect>& current,
+                                                   const std::vector<Effect>& model,
+                                                   const EffectScore& s, const Fitter& fit);
+/// The held-out gain of model over current on a roller's decelerating samples (nothing where
+/// too few decelerate).
+std::optional<double> gain_where_decelerating(const std::vector<Run>& runs,
+                                              const std::vector<Effect>& current,
+                                              const std::vector<Effect>& model, const Fitter& fit);
 /// The runs a held-out fold is fitted on: all but fold k's (heldout's folds: one run each up to
 /// kMaxFolds runs, blocks of consecutive runs past that); [lo, hi) are the held-out runs.
 std::vector<const Run*> fold_training(const std::vector<Run>& runs, std::size_t k, std::size_t& lo,

@@ -74,6 +74,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
     std::vector<EffectScore> scores;
     std::vector<Fit> fits;
     std::vector<std::vector<Effect>> models;
+    std::vector<std::optional<std::string>> decel;  // a wheel's inertia where the wheel decelerates
     // The current model without the tyre's shift, held out: a candidate fitted without the shift
     // is credited with what it adds to that model too, not with the shift's own removal (a
     // two-run null set of B's gained 16 % with an inertia, a threshold and a cap all at zero).
@@ -112,6 +113,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       s.gain = 1.0 - s.heldout_rmse_after_n / std::max(s.heldout_rmse_before_n, 1e-12);
       s.delta_bic = f.bic() - current_fit.bic();
       s.params = score_at(e, model, f).params;
+      decel.push_back(inertia_in_deceleration(runs, chosen, model, s, fit));
       scores.push_back(s);
       fits.push_back(std::move(f));
       models.push_back(std::move(model));
@@ -167,18 +169,24 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
         own_runs[i] = std::move(own);
       }
     }
-    const std::vector<std::size_t> order = by_gain();
     std::size_t points = 0;
     for (const Run& r : runs) points += r.fitted_points();
     const double margin = bic_margin_for(o, points);
     auto passes = [&](const EffectScore& e) {
-      return e.gain >= o.gate_gain && e.delta_bic <= -margin;
+      return (e.gain >= o.gate_gain && e.delta_bic <= -margin) ||
+             decel[static_cast<std::size_t>(&e - scores.data())].has_value();
     };
+    // The candidates past the gates first (a wheel's inertia shown where the wheel decelerates
+    // passes with its diluted gain), each group by gain.
+    std::vector<std::size_t> order = by_gain();
+    std::stable_partition(order.begin(), order.end(),
+                          [&](std::size_t i) { return passes(scores[i]); });
     // The best candidate past the gates whose parameters all lie inside their physical ranges (a
     // misspecified curve on the ground was taken for load transfer with the stiffness ratio at
     // its end, 3); one at the end of a range is noted and the next one is considered.
     for (auto& e : scores) {
       e.round = static_cast<int>(round);
+      if (passes(e)) continue;
       if (e.gain < o.gate_gain)
         e.decision = fmt::format("held-out gain below the gate {:.3f}", o.gate_gain);
       else if (e.delta_bic > -margin)
@@ -187,7 +195,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
     std::size_t pick = order.size();
     for (std::size_t k = 0; k < order.size() && pick == order.size(); ++k) {
       EffectScore& e = scores[order[k]];
-      if (!passes(e)) break;  // sorted by gain: the rest do not pass the gain gate either
+      if (!passes(e)) break;  // the passing first: the rest do not pass the gates either
       const auto eps = effect_params(e.effect);
       std::optional<std::size_t> end;
       for (std::size_t j = 0; j < eps.size() && !end; ++j)
@@ -263,6 +271,11 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       scores[order[pick]].decision =
           round == 0 ? "accepted (round 1: the largest gain past the gates)"
                      : fmt::format("accepted (round {}: the largest further gain)", round + 1);
+      if (const auto& d = decel[order[pick]]; d && !(scores[order[pick]].gain >= o.gate_gain &&
+                                                     scores[order[pick]].delta_bic <= -margin)) {
+        scores[order[pick]].decision = fmt::format("accepted (round {}: {})", round + 1, *d);
+        rep.notes.push_back(fmt::format("{} (round {}): {}", to_string(taken), round + 1, *d));
+      }
       for (auto& e : scores)
         if (e.decision.empty())
           e.decision =

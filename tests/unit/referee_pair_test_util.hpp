@@ -72,4 +72,26 @@ inline sim::TrialResult every_export_misspecified_ground(int index) {
                         every_export_ground_gates());
 }
 
+/// The referee's gates for every export's roller sets (seed 1, 20 null sets).
+inline gap::Options every_export_roller_gates() {
+  gap::Options gates = gap::calibrated_options(gap::Condition::Roller);
+  gates.gate_gain = 0.169;
+  gates.bic_margin_per_point = 0.3504;
+  gates.noise_factor = 5.92;
+  return gates;
+}
+
+/// The referee's roller trial `index` from every export (seed 1, null share 0.3).
+inline sim::TrialResult every_export_roller_trial(int index) {
+  const EveryExport every;
+  Rng rng(1 + 100 * static_cast<std::uint64_t>(gap::Condition::Roller));
+  sim::Injection inj;
+  for (int t = 0; t <= index; ++t)
+    inj = sim::draw_injection(rng, 0.3, gap::Condition::Roller, sim::Generator::B);
+  return sim::run_trial(inj,
+                        1000 + static_cast<std::uint64_t>(index) +
+                            100'000 * static_cast<std::uint64_t>(gap::Condition::Roller),
+                        every_export_roller_gates());
+}
+
 }  // namespace brakefit::test

@@ -14,28 +14,6 @@
 namespace brakefit {
 namespace {
 
-/// The referee's gates for every export's roller sets (seed 1, 20 null sets).
-gap::Options every_export_roller_gates() {
-  gap::Options gates = gap::calibrated_options(gap::Condition::Roller);
-  gates.gate_gain = 0.169;
-  gates.bic_margin_per_point = 0.3504;
-  gates.noise_factor = 5.92;
-  return gates;
-}
-
-/// The referee's roller trial `index` from every export (seed 1, null share 0.3).
-sim::TrialResult every_export_roller_trial(int index) {
-  const test::EveryExport every;
-  Rng rng(1 + 100 * static_cast<std::uint64_t>(gap::Condition::Roller));
-  sim::Injection inj;
-  for (int t = 0; t <= index; ++t)
-    inj = sim::draw_injection(rng, 0.3, gap::Condition::Roller, sim::Generator::B);
-  return sim::run_trial(inj,
-                        1000 + static_cast<std::uint64_t>(index) +
-                            100'000 * static_cast<std::uint64_t>(gap::Condition::Roller),
-                        every_export_roller_gates());
-}
-
 bool names(const sim::TrialResult& t, const std::string& effect) {
   return std::find(t.verdict.begin(), t.verdict.end(), effect) != t.verdict.end();
 }
@@ -44,7 +22,7 @@ TEST(CapBesideNamed, ATrucksThresholdIsNotGivenACap) {
   // Every export's roller trial 172: a truck's two runs at 2.4 km/h, 250 Hz, a 0.21 bar
   // threshold. Its runs ran away at one force (spread 0.6 %) still rising; the curve fitted
   // without the threshold peaks past that, with it at the runaway.
-  const auto t = every_export_roller_trial(172);
+  const auto t = test::every_export_roller_trial(172);
   ASSERT_EQ(t.truth.effect, "brake_threshold");
   EXPECT_FALSE(names(t, "cradle_cap")) << test::why_of(t);
   ASSERT_FALSE(t.verdict.empty());
@@ -55,7 +33,7 @@ TEST(CapBesideNamed, ATrucksThresholdIsNotGivenACap) {
 TEST(CapBesideNamed, ATrucksSlipOffsetAtOneHundredHertzIsNotGivenACap) {
   // Trial 175: a truck's three runs at 2.8 km/h, 100 Hz, its wheel's radius 0.54 % off, whose
   // rest at 100 Hz is within its uncertainty (the cap's own check from the rest cannot use it).
-  const auto t = every_export_roller_trial(175);
+  const auto t = test::every_export_roller_trial(175);
   ASSERT_EQ(t.truth.effect, "slip_offset");
   EXPECT_FALSE(names(t, "cradle_cap")) << test::why_of(t);
   ASSERT_FALSE(t.verdict.empty());
