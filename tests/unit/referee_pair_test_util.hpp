@@ -19,6 +19,13 @@ inline std::string why_of(const sim::TrialResult& r) {
   return why;
 }
 
+/// Whether a trial's verdict names the effect.
+inline bool names(const sim::TrialResult& t, const std::string& effect) {
+  for (const auto& v : t.verdict)
+    if (v == effect) return true;
+  return false;
+}
+
 /// The referee's pair trial `index` as `bench/gap_referee --pairs` draws and seeds it (seed 1),
 /// diagnosed under the condition's shipped gates (or those given).
 struct RefereePair {

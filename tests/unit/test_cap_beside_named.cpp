@@ -14,17 +14,13 @@
 namespace brakefit {
 namespace {
 
-bool names(const sim::TrialResult& t, const std::string& effect) {
-  return std::find(t.verdict.begin(), t.verdict.end(), effect) != t.verdict.end();
-}
-
 TEST(CapBesideNamed, ATrucksThresholdIsNotGivenACap) {
   // Every export's roller trial 172: a truck's two runs at 2.4 km/h, 250 Hz, a 0.21 bar
   // threshold. Its runs ran away at one force (spread 0.6 %) still rising; the curve fitted
   // without the threshold peaks past that, with it at the runaway.
   const auto t = test::every_export_roller_trial(172);
   ASSERT_EQ(t.truth.effect, "brake_threshold");
-  EXPECT_FALSE(names(t, "cradle_cap")) << test::why_of(t);
+  EXPECT_FALSE(test::names(t, "cradle_cap")) << test::why_of(t);
   ASSERT_FALSE(t.verdict.empty());
   EXPECT_EQ(t.verdict.front(), "brake_threshold") << test::why_of(t);
   EXPECT_NEAR(t.estimate, t.truth.magnitude, 0.15 * t.truth.magnitude);
@@ -35,7 +31,7 @@ TEST(CapBesideNamed, ATrucksSlipOffsetAtOneHundredHertzIsNotGivenACap) {
   // rest at 100 Hz is within its uncertainty (the cap's own check from the rest cannot use it).
   const auto t = test::every_export_roller_trial(175);
   ASSERT_EQ(t.truth.effect, "slip_offset");
-  EXPECT_FALSE(names(t, "cradle_cap")) << test::why_of(t);
+  EXPECT_FALSE(test::names(t, "cradle_cap")) << test::why_of(t);
   ASSERT_FALSE(t.verdict.empty());
   EXPECT_EQ(t.verdict.front(), "slip_offset") << test::why_of(t);
 }
@@ -53,8 +49,8 @@ TEST(CapBesideNamed, ACradlesCapBesideAThresholdStays) {
   }
   ASSERT_GE(index, 0);
   const auto p = test::referee_pair(gap::Condition::Roller, sim::Generator::A, index);
-  EXPECT_TRUE(names(p.res, "cradle_cap")) << p.why;
-  EXPECT_TRUE(names(p.res, "brake_threshold")) << p.why;
+  EXPECT_TRUE(test::names(p.res, "cradle_cap")) << p.why;
+  EXPECT_TRUE(test::names(p.res, "brake_threshold")) << p.why;
 }
 
 }  // namespace

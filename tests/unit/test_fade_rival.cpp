@@ -33,10 +33,6 @@ gap::Run steady_run() {
   return r;
 }
 
-bool names(const sim::TrialResult& t, const std::string& effect) {
-  return std::find(t.verdict.begin(), t.verdict.end(), effect) != t.verdict.end();
-}
-
 bool fade_note(const sim::TrialResult& t) {
   return std::any_of(t.notes.begin(), t.notes.end(), [](const std::string& s) {
     return s.find("fading with the energy") != std::string::npos;
@@ -75,7 +71,7 @@ TEST(FadeRival, AFadeOnTheGroundIsNotNamedSpeedFriction) {
   const gap::Options o = gap::calibrated_options(gap::Condition::Ground);
   const sim::Injection inj{"friction_fade", 1.0, gap::Condition::Ground, sim::Generator::B};
   const auto t = sim::run_trial(inj, 2, o);
-  EXPECT_FALSE(names(t, "speed_friction"));
+  EXPECT_FALSE(test::names(t, "speed_friction"));
   ASSERT_FALSE(t.verdict.empty());
   EXPECT_EQ(t.verdict.front(), "unexplained");
   EXPECT_TRUE(fade_note(t));
@@ -98,7 +94,7 @@ TEST(FadeRival, AFadingRollerTyreIsNotNamedWheelInertia) {
   gates.noise_factor = 1.56;
   const auto t =
       sim::run_trial(sim::draw_outside(29, gap::Condition::Roller), sim::outside_seed(29), gates);
-  EXPECT_FALSE(names(t, "wheel_inertia"));
+  EXPECT_FALSE(test::names(t, "wheel_inertia"));
   ASSERT_FALSE(t.verdict.empty());
   EXPECT_EQ(t.verdict.front(), "unexplained") << ::testing::PrintToString(t.verdict);
   EXPECT_TRUE(fade_note(t));
@@ -111,8 +107,8 @@ TEST(FadeRival, AFadeNamedWithLoadTransferIsWeighedOnEveryRunAlike) {
   const gap::Options o = gap::calibrated_options(gap::Condition::Ground);
   const auto t =
       sim::run_trial(sim::draw_outside(13, gap::Condition::Ground), sim::outside_seed(13), o);
-  EXPECT_FALSE(names(t, "speed_friction")) << test::why_of(t);
-  EXPECT_FALSE(names(t, "load_transfer")) << test::why_of(t);
+  EXPECT_FALSE(test::names(t, "speed_friction")) << test::why_of(t);
+  EXPECT_FALSE(test::names(t, "load_transfer")) << test::why_of(t);
   ASSERT_FALSE(t.verdict.empty());
   EXPECT_EQ(t.verdict.front(), "unexplained");
   EXPECT_TRUE(fade_note(t));
@@ -146,8 +142,8 @@ TEST(FadeRival, LoadTransferIsWeighedAgainstTheFadeInItsPlace) {
   const test::EveryExport every;
   const auto t = sim::run_trial(sim::draw_outside(29, gap::Condition::Ground),
                                 sim::outside_seed(29), test::every_export_ground_gates());
-  EXPECT_FALSE(names(t, "load_transfer")) << test::why_of(t);
-  EXPECT_FALSE(names(t, "speed_friction")) << test::why_of(t);
+  EXPECT_FALSE(test::names(t, "load_transfer")) << test::why_of(t);
+  EXPECT_FALSE(test::names(t, "speed_friction")) << test::why_of(t);
   ASSERT_FALSE(t.verdict.empty());
   EXPECT_EQ(t.verdict.front(), "unexplained");
   EXPECT_TRUE(fade_note(t)) << test::why_of(t);
