@@ -62,9 +62,9 @@ bool rival_elsewhere(const Report& rep, const Selection& sel, Effect rival, cons
   with_inertia.push_back(Effect::WheelInertia);
   with_rival.push_back(rival);
   const auto mine = gain_where_decelerating(sel.runs, base, with_inertia, *fit);
-  if (!mine || *mine < kInertiaDecelGain) return false;
+  if (!mine || mine->gain < kInertiaDecelGain) return false;
   const auto theirs = gain_where_decelerating(sel.runs, base, with_rival, *fit);
-  return theirs && *theirs < 0.5 * *mine;
+  return theirs && theirs->gain < 0.5 * mine->gain;
 }
 
 Quality judge_quality(const Report& rep, const Selection& sel, const Options& o,

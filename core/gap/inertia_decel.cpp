@@ -45,15 +45,19 @@ double heldout_decelerating(const std::vector<Run>& runs, const std::vector<Effe
 
 }  // namespace
 
-std::optional<double> gain_where_decelerating(const std::vector<Run>& runs,
-                                              const std::vector<Effect>& current,
-                                              const std::vector<Effect>& model, const Fitter& fit) {
+std::optional<DecelGain> gain_where_decelerating(const std::vector<Run>& runs,
+                                                 const std::vector<Effect>& current,
+                                                 const std::vector<Effect>& model,
+                                                 const Fitter& fit) {
   for (const Run& r : runs)
     if (r.bench != can::BenchKind::Roller) return std::nullopt;
-  std::size_t points = 0, points_with = 0;
-  const double before_n = heldout_decelerating(runs, current, fit, points);
-  if (points < kDecelMinPoints || !(before_n > 0)) return std::nullopt;
-  return 1.0 - heldout_decelerating(runs, model, fit, points_with) / before_n;
+  DecelGain g;
+  std::size_t points_with = 0;
+  g.before_n = heldout_decelerating(runs, current, fit, g.points);
+  if (g.points < kDecelMinPoints || !(g.before_n > 0)) return std::nullopt;
+  g.after_n = heldout_decelerating(runs, model, fit, points_with);
+  g.gain = 1.0 - g.after_n / g.before_n;
+  return g;
 }
 
 std::optional<std::string> inertia_in_deceleration(const std::vector<Run>& runs,
@@ -62,19 +66,13 @@ std::optional<std::string> inertia_in_deceleration(const std::vector<Run>& runs,
                                                    const EffectScore& s, const Fitter& fit) {
   if (s.effect != Effect::WheelInertia || s.params.empty() || !(s.params.front().second > 0))
     return std::nullopt;
-  for (const Run& r : runs)
-    if (r.bench != can::BenchKind::Roller) return std::nullopt;
-  std::size_t points = 0, points_with = 0;
-  const double before_n = heldout_decelerating(runs, current, fit, points);
-  if (points < kDecelMinPoints || !(before_n > 0)) return std::nullopt;
-  const double after_n = heldout_decelerating(runs, model, fit, points_with);
-  const double gain = 1.0 - after_n / before_n;
-  if (!(gain >= kInertiaDecelGain)) return std::nullopt;
+  const auto g = gain_where_decelerating(runs, current, model, fit);
+  if (!g || !(g->gain >= kInertiaDecelGain)) return std::nullopt;
   return fmt::format(
       "where the wheel decelerates (past {:.1f} m/s^2: {} samples, where its inertial force "
       "lies), held out, the inertia takes {:.0f} % of the error ({:.1f} N to {:.1f} N; at least "
       "{:.0f} %)",
-      kDecelMinMps2, points, 100 * gain, before_n, after_n, 100 * kInertiaDecelGain);
+      kDecelMinMps2, g->points, 100 * g->gain, g->before_n, g->after_n, 100 * kInertiaDecelGain);
 }
 
 }  // namespace brakefit::gap

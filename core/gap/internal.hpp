@@ -105,11 +105,16 @@ std::optional<std::string> inertia_in_deceleration(const std::vector<Run>& runs,
                                                    const std::vector<Effect>& current,
                                                    const std::vector<Effect>& model,
                                                    const EffectScore& s, const Fitter& fit);
-/// The held-out gain of model over current on a roller's decelerating samples (nothing where
-/// too few decelerate).
-std::optional<double> gain_where_decelerating(const std::vector<Run>& runs,
-                                              const std::vector<Effect>& current,
-                                              const std::vector<Effect>& model, const Fitter& fit);
+/// The held-out error of current and of model on a roller's decelerating samples (nothing where
+/// too few decelerate), and model's gain over current there.
+struct DecelGain {
+  double gain = 0.0, before_n = 0.0, after_n = 0.0;
+  std::size_t points = 0;
+};
+std::optional<DecelGain> gain_where_decelerating(const std::vector<Run>& runs,
+                                                 const std::vector<Effect>& current,
+                                                 const std::vector<Effect>& model,
+                                                 const Fitter& fit);
 /// The runs a held-out fold is fitted on: all but fold k's (heldout's folds: one run each up to
 /// kMaxFolds runs, blocks of consecutive runs past that); [lo, hi) are the held-out runs.
 std::vector<const Run*> fold_training(const std::vector<Run>& runs, std::size_t k, std::size_t& lo,

@@ -172,21 +172,21 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
     std::size_t points = 0;
     for (const Run& r : runs) points += r.fitted_points();
     const double margin = bic_margin_for(o, points);
-    auto passes = [&](const EffectScore& e) {
-      return (e.gain >= o.gate_gain && e.delta_bic <= -margin) ||
-             decel[static_cast<std::size_t>(&e - scores.data())].has_value();
+    auto past_gates = [&](const EffectScore& e) {
+      return e.gain >= o.gate_gain && e.delta_bic <= -margin;
     };
-    // The candidates past the gates first (a wheel's inertia shown where the wheel decelerates
-    // passes with its diluted gain), each group by gain.
+    // A wheel's inertia shown where the wheel decelerates passes with its diluted gain.
+    auto passes = [&](std::size_t i) { return past_gates(scores[i]) || decel[i].has_value(); };
+    // The candidates that pass first, each group by gain.
     std::vector<std::size_t> order = by_gain();
-    std::stable_partition(order.begin(), order.end(),
-                          [&](std::size_t i) { return passes(scores[i]); });
+    std::stable_partition(order.begin(), order.end(), passes);
     // The best candidate past the gates whose parameters all lie inside their physical ranges (a
     // misspecified curve on the ground was taken for load transfer with the stiffness ratio at
     // its end, 3); one at the end of a range is noted and the next one is considered.
-    for (auto& e : scores) {
+    for (std::size_t i = 0; i < scores.size(); ++i) {
+      EffectScore& e = scores[i];
       e.round = static_cast<int>(round);
-      if (passes(e)) continue;
+      if (passes(i)) continue;
       if (e.gain < o.gate_gain)
         e.decision = fmt::format("held-out gain below the gate {:.3f}", o.gate_gain);
       else if (e.delta_bic > -margin)
@@ -195,7 +195,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
     std::size_t pick = order.size();
     for (std::size_t k = 0; k < order.size() && pick == order.size(); ++k) {
       EffectScore& e = scores[order[k]];
-      if (!passes(e)) break;  // the passing first: the rest do not pass the gates either
+      if (!passes(order[k])) break;  // the passing first: the rest do not pass the gates either
       const auto eps = effect_params(e.effect);
       std::optional<std::size_t> end;
       for (std::size_t j = 0; j < eps.size() && !end; ++j)
@@ -271,8 +271,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       scores[order[pick]].decision =
           round == 0 ? "accepted (round 1: the largest gain past the gates)"
                      : fmt::format("accepted (round {}: the largest further gain)", round + 1);
-      if (const auto& d = decel[order[pick]]; d && !(scores[order[pick]].gain >= o.gate_gain &&
-                                                     scores[order[pick]].delta_bic <= -margin)) {
+      if (const auto& d = decel[order[pick]]; d && !past_gates(scores[order[pick]])) {
         scores[order[pick]].decision = fmt::format("accepted (round {}: {})", round + 1, *d);
         rep.notes.push_back(fmt::format("{} (round {}): {}", to_string(taken), round + 1, *d));
       }
@@ -293,7 +292,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       best.accepted = true;
       for (std::size_t k = pick + 1; k < order.size(); ++k) {
         const EffectScore& next = scores[order[k]];
-        if (passes(next) && best.gain - next.gain < o.separability * best.gain)
+        if (passes(order[k]) && best.gain - next.gain < o.separability * best.gain)
           rep.notes.push_back(fmt::format(fmt::runtime(separability_note), to_string(best.effect),
                                           to_string(next.effect), best.gain, next.gain));
         break;
