@@ -25,6 +25,12 @@ namespace {
 constexpr int kDroopLagRefinements = 12;
 /// Transitions needed for the slow trend's two columns, and for the ripple's four.
 constexpr std::size_t kTrendTransitions = 20, kRippleTransitions = 16;
+/// Transitions per turn of the roller the ripple's columns need (two a cycle): they are read only
+/// where the staircase steps, and a long slow run steps about once a turn. There a ripple fitted
+/// from 25 transitions over 24 turns read 2.5 mm/s for the drive's 0.35 mm/s, and the run's
+/// level, pinned at its rest by that phantom, 1.3 mm/s high (a slip error of 1e-3: 130 N across a
+/// car's linear region).
+constexpr double kRippleTransitionsPerTurn = 2.0;
 
 /// The lagged force in kN (the droop's column: one drive loses the same speed per newton in every
 /// run of a station).
@@ -65,11 +71,11 @@ Stair read_stair(const StaircaseView& s) {
   for (double x : s.v_mps) out.mean_mps += x / static_cast<double>(n);
   out.span_s = std::max(s.t_s.back() - s.t_s.front(), 1e-6);
   out.trend = out.at.size() >= kTrendTransitions;
-  out.harmonics =
-      out.at.size() >= kRippleTransitions &&
-              out.mean_mps * out.span_s / (2 * M_PI * s.roller_radius_m) >= kHeldRollerMinTurns
-          ? 2
-          : 0;
+  const double turns = out.mean_mps * out.span_s / (2 * M_PI * s.roller_radius_m);
+  out.harmonics = out.at.size() >= kRippleTransitions && turns >= kHeldRollerMinTurns &&
+                          static_cast<double>(out.at.size()) >= kRippleTransitionsPerTurn * turns
+                      ? 2
+                      : 0;
   return out;
 }
 

@@ -276,9 +276,14 @@ TEST(Stations, ACandidateIsNotCreditedWithTheTyreShiftsRemoval) {
       gap::diagnose(q, sim::pooled_start(q), gap::calibrated_options(gap::Condition::Roller));
   ASSERT_FALSE(rep.baseline_effects.empty());
   EXPECT_EQ(rep.baseline_effects.front(), gap::Effect::TyreShift);
+  EXPECT_EQ(rep.verdict, std::vector<std::string>{"none"});
   ASSERT_FALSE(rep.effects.empty());
+  // The candidates that fit at zero: the baseline itself, credited with nothing. (A lag fitted
+  // at the end of its range may bend the curve's foot a little; it is refused there.)
   for (const auto& e : rep.effects)
-    if (e.round == 0) {
+    if (e.round == 0 &&
+        (e.effect == gap::Effect::WheelInertia || e.effect == gap::Effect::BrakeThreshold ||
+         e.effect == gap::Effect::CradleCap)) {
       EXPECT_LT(e.gain, 0.05) << gap::to_string(e.effect);
     }
 }
