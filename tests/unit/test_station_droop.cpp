@@ -15,6 +15,22 @@
 
 using namespace brakefit;
 
+namespace {
+
+/// RMS of a run's rebuilt roller speed against the ideal encoders' run (the nearest sample at
+/// or after each time).
+double speed_rms_mps(const gap::Run& q, const gap::Run& truth) {
+  double se = 0;
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < q.t_s.size(); ++i) {
+    while (j + 1 < truth.t_s.size() && truth.t_s[j] < q.t_s[i]) ++j;
+    se += std::pow(q.v_ref_mps[i] - truth.v_ref_mps[j], 2);
+  }
+  return std::sqrt(se / static_cast<double>(q.t_s.size()));
+}
+
+}  // namespace
+
 TEST(Stations, ADroopingRollerIsRebuiltWithItsDroop) {
   // Seed 1000003 of the every-station draw: a car on a 5.8 km/h roller in 1.5 mm/s steps, its
   // drive drooping by several steps under the brake. Rebuilt piecewise between its transitions,
@@ -53,15 +69,8 @@ TEST(Stations, AStationsRunsAreRebuiltWithOneDroop) {
   const double step = set.runs.front().tester.speed_step_mps;
   auto worst_rms = [&](const std::vector<gap::Run>& runs) {
     double worst = 0;
-    for (std::size_t k = 0; k < runs.size(); ++k) {
-      double se = 0;
-      for (std::size_t i = 0; i < runs[k].t_s.size(); ++i) {
-        std::size_t j = 0;
-        while (j + 1 < truth[k].t_s.size() && truth[k].t_s[j] < runs[k].t_s[i]) ++j;
-        se += std::pow(runs[k].v_ref_mps[i] - truth[k].v_ref_mps[j], 2);
-      }
-      worst = std::max(worst, std::sqrt(se / static_cast<double>(runs[k].t_s.size())));
-    }
+    for (std::size_t k = 0; k < runs.size(); ++k)
+      worst = std::max(worst, speed_rms_mps(runs[k], truth[k]));
     return worst;
   };
   const double alone = worst_rms(q);
@@ -180,14 +189,8 @@ TEST(Stations, ASlowRunSteppingOnceATurnIsNotGivenARipple) {
   ASSERT_NE(note.find("together"), std::string::npos) << note;
   double longest_s = 0;
   for (std::size_t k = 0; k < q.size(); ++k) {
-    double se = 0;
-    for (std::size_t i = 0; i < q[k].t_s.size(); ++i) {
-      std::size_t j = 0;
-      while (j + 1 < truth[k].t_s.size() && truth[k].t_s[j] < q[k].t_s[i]) ++j;
-      se += std::pow(q[k].v_ref_mps[i] - truth[k].v_ref_mps[j], 2);
-    }
     longest_s = std::max(longest_s, q[k].t_s.back() - q[k].t_s.front());
-    EXPECT_LT(std::sqrt(se / static_cast<double>(q[k].t_s.size())), 0.5 * step) << "run " << k;
+    EXPECT_LT(speed_rms_mps(q[k], truth[k]), 0.5 * step) << "run " << k;
   }
   EXPECT_GT(longest_s, 10.0) << "the set holds the slow run";
 }
