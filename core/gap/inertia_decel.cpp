@@ -20,11 +20,16 @@ constexpr double kDecelMinMps2 = 0.5;
 /// Fewer decelerating samples than this say nothing held out (one run's two last samples).
 constexpr std::size_t kDecelMinPoints = 10;
 
+struct HeldOut {
+  double rms_n = NAN;
+  std::size_t points = 0;
+};
+
 /// Held-out RMS over the decelerating samples (leave one run out, blocks past kMaxFolds).
-double heldout_decelerating(const std::vector<Run>& runs, const std::vector<Effect>& effects,
-                            const Fitter& fit, std::size_t& points) {
+HeldOut heldout_decelerating(const std::vector<Run>& runs, const std::vector<Effect>& effects,
+                             const Fitter& fit) {
   double sq = 0;
-  points = 0;
+  std::size_t points = 0;
   const std::size_t n = runs.size(), folds = std::min(n, kMaxFolds);
   for (std::size_t k = 0; k < folds; ++k) {
     std::size_t lo = 0, hi = 0;
@@ -40,7 +45,7 @@ double heldout_decelerating(const std::vector<Run>& runs, const std::vector<Effe
         }
     }
   }
-  return points ? std::sqrt(sq / static_cast<double>(points)) : NAN;
+  return {points ? std::sqrt(sq / static_cast<double>(points)) : NAN, points};
 }
 
 }  // namespace
@@ -51,13 +56,10 @@ std::optional<DecelGain> gain_where_decelerating(const std::vector<Run>& runs,
                                                  const Fitter& fit) {
   for (const Run& r : runs)
     if (r.bench != can::BenchKind::Roller) return std::nullopt;
-  DecelGain g;
-  std::size_t points_with = 0;
-  g.before_n = heldout_decelerating(runs, current, fit, g.points);
-  if (g.points < kDecelMinPoints || !(g.before_n > 0)) return std::nullopt;
-  g.after_n = heldout_decelerating(runs, model, fit, points_with);
-  g.gain = 1.0 - g.after_n / g.before_n;
-  return g;
+  const HeldOut before = heldout_decelerating(runs, current, fit);
+  if (before.points < kDecelMinPoints || !(before.rms_n > 0)) return std::nullopt;
+  const double after_n = heldout_decelerating(runs, model, fit).rms_n;
+  return DecelGain{1.0 - after_n / before.rms_n, before.rms_n, after_n, before.points};
 }
 
 std::optional<std::string> inertia_in_deceleration(const std::vector<Run>& runs,
