@@ -41,8 +41,12 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
   if (n <= params.size() || noise_n <= 0 || gate_gain <= 0 || gate_gain >= 1) return out;
   const Eigen::MatrixXd jac = prediction_jacobian(pointers(runs), params, model);
   // Each candidate is scored with the model's nuisance slip bias (the tyre's own shift, or a
-  // quantised reference's bias) and, for the shift, without it. A slip offset is that bias
-  // beyond the bias's bound: against the basis without the nuisance, it shows past the bound.
+  // quantised reference's bias) and, for the shift, without it, but credited only with what it
+  // adds to the better of the model with and without. The bias takes what of an effect's force
+  // it can within its bound (a 1.3 bar dead zone on a quantised roller read as a 1.5e-3 foot
+  // shift, its reach 0.14 bar against the basis without the bias): an effect shows against the
+  // basis with the bias, or past the magnitude the bias takes at its bound against the basis
+  // without it (a slip offset: past the bound itself).
   std::vector<Eigen::MatrixXd> bases{jac};
   std::vector<Eigen::Index> keep{0, 1, 2, 3};
   std::size_t at = 4;
@@ -85,13 +89,23 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
     }
     // What of it the model cannot take: its residual after the least-squares projection on the
     // model's parameters (the curve's, the nuisances', the named effects').
-    const double past = e == Effect::SlipOffset ? nuisance_bias_bound(pointers(runs), with) : 0.0;
     double smallest = INFINITY;
-    for (std::size_t k = 0; k < bases.size(); ++k) {
-      const Eigen::VectorXd left = unit - bases[k] * solvers[k].solve(unit);
-      const double left_rms = std::sqrt(left.squaredNorm() / static_cast<double>(n));
-      if (left_rms > 0 && std::isfinite(left_rms))
-        smallest = std::min(smallest, (k > 0 ? past : 0.0) + needed_n / left_rms);
+    const Eigen::VectorXd x = solvers[0].solve(unit);
+    const Eigen::VectorXd left = unit - bases[0] * x;
+    if (const double left_rms = std::sqrt(left.squaredNorm() / static_cast<double>(n));
+        left_rms > 0 && std::isfinite(left_rms))
+      smallest = needed_n / left_rms;
+    if (bases.size() > 1) {
+      // The nuisance slip per unit of the effect where the bias takes it, against its bound.
+      double bias_per_unit = 0;
+      for (Eigen::Index k = 0; k < p_count; ++k)
+        if (std::find(keep.begin(), keep.end(), k) == keep.end()) bias_per_unit += std::abs(x(k));
+      const double taken =
+          bias_per_unit > 0 ? nuisance_bias_bound(pointers(runs), with) / bias_per_unit : 0.0;
+      const Eigen::VectorXd rest = unit - bases[1] * solvers[1].solve(unit);
+      const double rest_rms = std::sqrt(rest.squaredNorm() / static_cast<double>(n));
+      if (rest_rms > 0 && std::isfinite(rest_rms) && std::isfinite(taken))
+        smallest = std::min(smallest, taken + needed_n / rest_rms);
     }
     out.push_back({e, smallest});
   }
