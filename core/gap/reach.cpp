@@ -37,26 +37,24 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
   std::vector<EffectReach> out;
   std::size_t n = 0;
   for (const Run& r : runs) n += r.t_s.size();
-  const auto p_count = static_cast<Eigen::Index>(params.size());
   if (n <= params.size() || noise_n <= 0 || gate_gain <= 0 || gate_gain >= 1) return out;
   const Eigen::MatrixXd jac = prediction_jacobian(pointers(runs), params, model);
   // Each candidate is scored with the model's nuisance slip bias (the tyre's own shift, or a
   // quantised reference's bias) and, for the shift, without it, but credited only with what it
-  // adds to the better of the model with and without. The bias takes what of an effect's force
-  // it can within its bound (a 1.3 bar dead zone on a quantised roller read as a 1.5e-3 foot
-  // shift, its reach 0.14 bar against the basis without the bias): an effect shows against the
+  // adds to the better of the two. The bias takes what it can of an effect's force within its
+  // bound (a dead zone on a quantised roller reads as a foot shift): an effect shows against the
   // basis with the bias, or past the magnitude the bias takes at its bound against the basis
   // without it (a slip offset: past the bound itself).
   std::vector<Eigen::MatrixXd> bases{jac};
-  std::vector<Eigen::Index> keep{0, 1, 2, 3};
+  std::vector<Eigen::Index> keep{0, 1, 2, 3}, bias;  // the curve's and effects', the bias's
   std::size_t at = 4;
   for (Effect b : model) {
     const std::size_t count = effect_params(b).size();
-    if (!is_nuisance(b))
-      for (std::size_t k = 0; k < count; ++k) keep.push_back(static_cast<Eigen::Index>(at + k));
+    for (std::size_t k = 0; k < count; ++k)
+      (is_nuisance(b) ? bias : keep).push_back(static_cast<Eigen::Index>(at + k));
     at += count;
   }
-  if (static_cast<Eigen::Index>(keep.size()) < p_count) {
+  if (!bias.empty()) {
     Eigen::MatrixXd without(jac.rows(), static_cast<Eigen::Index>(keep.size()));
     for (std::size_t k = 0; k < keep.size(); ++k)
       without.col(static_cast<Eigen::Index>(k)) = jac.col(keep[k]);
@@ -98,8 +96,7 @@ std::vector<EffectReach> effect_reach(const std::vector<Run>& runs,
     if (bases.size() > 1) {
       // The nuisance slip per unit of the effect where the bias takes it, against its bound.
       double bias_per_unit = 0;
-      for (Eigen::Index k = 0; k < p_count; ++k)
-        if (std::find(keep.begin(), keep.end(), k) == keep.end()) bias_per_unit += std::abs(x(k));
+      for (Eigen::Index k : bias) bias_per_unit += std::abs(x(k));
       const double taken =
           bias_per_unit > 0 ? nuisance_bias_bound(pointers(runs), with) / bias_per_unit : 0.0;
       const Eigen::VectorXd rest = unit - bases[1] * solvers[1].solve(unit);
