@@ -59,14 +59,17 @@ void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& f
   const double refit_n = heldout(runs, rep.accepted, fit);
   // The residual the estimate is read from is the named model's, and a model that is not yet the
   // whole account (an inertia named before the load transfer beside it has its share) leaves a
-  // bend the ripple's sinusoids partly take: that estimate is kept only where the named model,
-  // refitted on it, holds out at least as well as on the baseline's.
-  if (refit_n > before_n) {
+  // bend the ripple's sinusoids partly take. Refitted on that estimate, the model can then hold
+  // out worse and put a parameter at the end of its range, which would veto every name the
+  // selection made on the baseline's estimate: there the baseline's estimate is kept. A model
+  // that holds out worse inside its ranges keeps the new estimate (a load transfer's held-out
+  // error trades its load against the tyre's peak, §9 of gap.md, and reads its load closer on it).
+  if (refit_n > before_n && named_at_range_end(rep.accepted, refit)) {
     runs = std::move(baseline_ripple_runs);
     rep.notes.push_back(fmt::format(
         "with {} named, the encoders' ripple was estimated again from that model's residual "
         "({}); refitted, it leaves {:.1f} N held out against {:.1f} N with the baseline's "
-        "estimate, which is kept",
+        "estimate and puts a parameter at the end of its range: the baseline's estimate is kept",
         fmt::join(rep.verdict.begin(),
                   std::find(rep.verdict.begin(), rep.verdict.end(), "unexplained"), ", "),
         ripple, refit_n, before_n));
