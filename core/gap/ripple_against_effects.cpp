@@ -50,13 +50,16 @@ void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& f
   if (!named) return;
   const bool gap_left_before = gap_left(rep, o);
   const double floor_before_n = rep.noise_n;
-  std::vector<Run> baseline_ripple_runs = runs;
-  const std::string ripple = remove_encoder_ripple(runs, rep.after.params, rep.accepted);
+  std::vector<Run> rerippled = runs;
+  const std::string ripple = remove_encoder_ripple(rerippled, rep.after.params, rep.accepted);
   if (ripple.empty()) return;
-  level_reference_biases(runs);
+  level_reference_biases(rerippled);
   const double before_n = rep.gap_after_rmse_n;
-  Fit refit = fit(pointers(runs), rep.accepted);
-  const double refit_n = heldout(runs, rep.accepted, fit);
+  Fit refit = fit(pointers(rerippled), rep.accepted);
+  const double refit_n = heldout(rerippled, rep.accepted, fit);
+  const std::string named_now = fmt::format(
+      "{}", fmt::join(rep.verdict.begin(),
+                      std::find(rep.verdict.begin(), rep.verdict.end(), "unexplained"), ", "));
   // The residual the estimate is read from is the named model's, and a model that is not yet the
   // whole account (an inertia named before the load transfer beside it has its share) leaves a
   // bend the ripple's sinusoids partly take. Refitted on that estimate, the model can then hold
@@ -65,16 +68,14 @@ void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& f
   // that holds out worse inside its ranges keeps the new estimate (a load transfer's held-out
   // error trades its load against the tyre's peak, §9 of gap.md, and reads its load closer on it).
   if (refit_n > before_n && named_at_range_end(rep.accepted, refit)) {
-    runs = std::move(baseline_ripple_runs);
     rep.notes.push_back(fmt::format(
         "with {} named, the encoders' ripple was estimated again from that model's residual "
         "({}); refitted, it leaves {:.1f} N held out against {:.1f} N with the baseline's "
         "estimate and puts a parameter at the end of its range: the baseline's estimate is kept",
-        fmt::join(rep.verdict.begin(),
-                  std::find(rep.verdict.begin(), rep.verdict.end(), "unexplained"), ", "),
-        ripple, refit_n, before_n));
+        named_now, ripple, refit_n, before_n));
     return;
   }
+  runs = std::move(rerippled);
   rep.after = std::move(refit);
   rep.gap_after_rmse_n = refit_n;
   rep.floor = noise_floor(runs, rep.before.params);
@@ -83,9 +84,7 @@ void ripple_against_effects(Report& rep, std::vector<Run>& runs, const Fitter& f
   rep.notes.push_back(fmt::format(
       "with {} named, the encoders' ripple was estimated again from that model's residual ({}); "
       "refitted, the held-out gap after is {:.1f} N ({:.1f} N with the baseline's estimate)",
-      fmt::join(rep.verdict.begin(),
-                std::find(rep.verdict.begin(), rep.verdict.end(), "unexplained"), ", "),
-      ripple, rep.gap_after_rmse_n, before_n));
+      named_now, ripple, rep.gap_after_rmse_n, before_n));
   name_verdict(rep, o);
   // Refitted on these runs, the named model is held to the selection's rule again: a parameter at
   // the end of its range is no physical account (generator A's Burckhardt tyre on the ground,
