@@ -1,7 +1,7 @@
 // The blinded-injection referee of `brakefit gap` (issues 5 and 10):
 //   gap_referee [--condition roller|ground|roller_vs_road|all] [--trials 200] [--trials-other 80]
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
-//               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1]
+//               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1|0|only]
 //               [--only EFFECT,...] [--pick I,...] [--why 1|2] [--pairs N] [--detection SETS]
 //               [--results FILE [--results-key K]] [--export-hz HZ] [--outside N]
 // Three generators make the runs: A, the project's simulator (candump logs), B, the second
@@ -12,9 +12,9 @@
 // (model vs measurement on the roller and on flat ground; roller vs road, A only): 1. calibrates
 // the acceptance gates on null sets of each generator (seeds 1 000 000 + i, disjoint from the
 // trials'), 2. runs the trials of each generator with its own gates (straight) and with the other's
-// (crossed): each draws an effect or none and a magnitude, simulates three runs, hides the label,
-// diagnoses and scores. Prints the confusion matrix, the false-positive rate on none, the share of
-// null sets said exactly
+// (crossed; `--crossed only`: those rows alone): each draws an effect or none and a magnitude,
+// simulates three runs, hides the label, diagnoses and scores. Prints the confusion matrix, the
+// false-positive rate on none, the share of null sets said exactly
 // ["none"], the magnitude errors and the gap left after correction relative to the noise floor;
 // a JSON document (brakefit.gap_referee/1) last. Trials run on --threads threads (results do not
 // depend on it: each trial has its seed).
@@ -58,7 +58,7 @@ int run(int argc, char** argv) {
   std::string results, results_key;  // --results FILE [--results-key KEY]
   std::string stations = "cars";     // --stations: generator B's draws
   std::string export_hz_text;        // --export-hz: generator B's export rate (empty: as drawn)
-  bool crossed = true;
+  bool crossed = true, crossed_only = false;  // --crossed 1|0|only
   st.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int i = 1; i < argc; i += 2) {
     const std::string k = argv[i];
@@ -69,7 +69,8 @@ int run(int argc, char** argv) {
              "  [--pairs N]           (pair trials per row: two effects at once, A and B)\n"
              "  [--outside N]         (A's and B's sets with an effect outside the\n"
              "                         catalogue: a pressure transducer's bow, fading friction)\n"
-             "  [--seed S] [--threads N] [--generators A,B,C] [--gen-c SCRIPT] [--crossed 1|0]\n"
+             "  [--seed S] [--threads N] [--generators A,B,C] [--gen-c SCRIPT]\n"
+             "  [--crossed 1|0|only]  (rows with another generator's gates too, or only them)\n"
              "  [--trials-from C]      (only these generators' trials; gates from all)\n"
              "  [--stations cars|every] (generator B's sets: cars at 5 km/h and 30-70 km/h, or\n"
              "                         every export: 50-1000 Hz, 2-6 runs, heavy vehicles)\n"
@@ -134,9 +135,15 @@ int run(int argc, char** argv) {
       for (std::string e; std::getline(list, e, ',');) st.pick.push_back(std::atoi(e.c_str()));
     } else if (k == "--why")
       st.why = std::atoi(v);
-    else if (k == "--crossed")
-      crossed = std::string(v) != "0" && std::string(v) != "no";
-    else {
+    else if (k == "--crossed") {
+      const std::string w = v;
+      if (w != "1" && w != "yes" && w != "0" && w != "no" && w != "only") {
+        std::cerr << "gap_referee: --crossed takes 1, 0 or only, not '" << w << "'\n";
+        return 64;
+      }
+      crossed = w != "0" && w != "no";
+      crossed_only = w == "only";
+    } else {
       std::cerr << "gap_referee: unknown option " << k << "\n";
       return 64;
     }
@@ -196,7 +203,7 @@ int run(int argc, char** argv) {
     // Straight (trials and gates of one generator), then crossed (gates of the other).
     for (auto trial : gens)
       for (auto gate : gens)
-        if ((gate == trial || crossed) &&
+        if ((gate == trial ? !crossed_only : crossed) &&
             (trials_from.empty() || trials_from.find(sim::to_string(trial)) != std::string::npos))
           j["conditions"].push_back(bench::run_condition(c, st, trial, gates[gate], gate));
   }

@@ -283,14 +283,19 @@ void add_gap_command(CLI::App& app) {
         rep.gap_before_rmse_n, rep.gap_after_rmse_n,
         rep.gap_before_rmse_n > 0 ? 100 * (1 - rep.gap_after_rmse_n / rep.gap_before_rmse_n) : 0.0,
         rep.noise_n, rep.floor.force_n, rep.floor.slip_sd_ratio, rep.floor.slip_n);
-    for (int stage = 0; stage < 2; ++stage) {
+    // Round 1 (each alone), the rounds that named an effect, then the round that stopped.
+    for (int stage = 0; stage < 3; ++stage) {
       bool header = false;
-      for (const auto& e : rep.effects) {
-        if ((e.round > 0) != (stage == 1)) continue;
+      for (const auto& e : stage == 2 ? rep.stopping_round : rep.effects) {
+        if (stage < 2 && (e.round > 0) != (stage == 1)) continue;
         if (!header) {
-          std::cout << (stage == 0 ? "each effect alone against the baseline:\n"
-                                   : "forward selection (each scored against the model chosen "
-                                     "before it):\n");
+          std::cout << (stage == 0   ? std::string("each effect alone against the baseline:\n")
+                        : stage == 1 ? std::string("forward selection (each scored against the "
+                                                   "model chosen before it):\n")
+                                     : fmt::format("forward selection's round {}, none taken "
+                                                   "(each beside the effects it chose before; "
+                                                   "the checks after it are in the notes):\n",
+                                                   e.round + 1));
           std::cout << fmt::format("  {:<18} {:<32} {:>9} {:>9}  {}\n", "effect", "parameters",
                                    "gain", "dBIC", "decision");
           header = true;

@@ -17,6 +17,24 @@ namespace brakefit::cli {
 
 namespace {
 
+/// One row of the effects' table: an effect's score (gap.json's shape) at its stage.
+std::string effect_row(const nlohmann::ordered_json& e) {
+  std::string ps;  // "name = value" per parameter, not raw JSON
+  for (const auto& [k, v] : e["params"].items())
+    ps += fmt::format("{}{} = {}", ps.empty() ? "" : ", ", k,
+                      v.is_number() ? fmt::format("{:.4g}", v.get<double>()) : "n/a");
+  return fmt::format(
+      "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{:.1f}</td><td>{:.1f}</td><td>{:.3f}</td>"
+      "<td>{}</td><td>{}</td></tr>\n",
+      e["accepted"].get<bool>() ? " class=\"ok\"" : "", e["name"].get<std::string>(),
+      plot::xml_escape(e["stage"].get<std::string>()), plot::xml_escape(ps),
+      e["heldout_rmse_before_n"].get<double>(), e["heldout_rmse_after_n"].get<double>(),
+      e["gain"].get<double>(),
+      e["delta_bic"].is_number() ? fmt::format("{:.1f}", e["delta_bic"].get<double>())
+                                 : std::string("(found on the roller runs)"),
+      plot::xml_escape(e["decision"].get<std::string>()));
+}
+
 nlohmann::ordered_json params_json(const gap::Fit& f, const std::vector<gap::Effect>& effects) {
   nlohmann::ordered_json j;
   const auto names = gap::param_names(effects);
@@ -57,22 +75,30 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
   }
   j["left_out"] = left_out_json(left_out);
   j["verdict"] = r.verdict;
-  j["effects"] = nlohmann::ordered_json::array();
-  for (const auto& e : r.effects) {
-    nlohmann::ordered_json x;
-    x["name"] = gap::to_string(e.effect);
-    nlohmann::ordered_json p;
-    for (const auto& [k, v] : e.params) p[k] = num(v);
-    x["params"] = p;
-    x["heldout_rmse_before_n"] = num(e.heldout_rmse_before_n);
-    x["heldout_rmse_after_n"] = num(e.heldout_rmse_after_n);
-    x["gain"] = num(e.gain);
-    x["delta_bic"] = num(e.delta_bic);
-    x["accepted"] = e.accepted;
-    x["stage"] = e.round == 0 ? "alone" : fmt::format("forward selection round {}", e.round + 1);
-    x["decision"] = e.decision;
-    j["effects"].push_back(x);
-  }
+  const auto scores_json = [&](const std::vector<gap::EffectScore>& scores, bool stopped) {
+    auto out = nlohmann::ordered_json::array();
+    for (const auto& e : scores) {
+      nlohmann::ordered_json x;
+      x["name"] = gap::to_string(e.effect);
+      nlohmann::ordered_json p;
+      for (const auto& [k, v] : e.params) p[k] = num(v);
+      x["params"] = p;
+      x["heldout_rmse_before_n"] = num(e.heldout_rmse_before_n);
+      x["heldout_rmse_after_n"] = num(e.heldout_rmse_after_n);
+      x["gain"] = num(e.gain);
+      x["delta_bic"] = num(e.delta_bic);
+      x["accepted"] = e.accepted;
+      x["stage"] = e.round == 0 ? std::string("alone")
+                                : fmt::format("forward selection round {}{}", e.round + 1,
+                                              stopped ? ", none taken" : "");
+      x["decision"] = e.decision;
+      out.push_back(x);
+    }
+    return out;
+  };
+  j["effects"] = scores_json(r.effects, false);
+  // Where forward selection stopped after naming an effect: what each candidate did beside it.
+  j["stopping_round"] = scores_json(r.stopping_round, true);
   j["where"] = nlohmann::ordered_json::array();
   for (const auto& w : r.where)
     j["where"].push_back(
@@ -153,22 +179,8 @@ void write_report(const std::string& dir, const gap::Report& r, const std::vecto
   write_file(dir + "/curves.svg", plot::render_svg(curves));
   write_file(dir + "/gap.json", doc.dump(2) + "\n");
   std::string rows;
-  for (const auto& e : doc["effects"]) {
-    std::string ps;  // "name = value" per parameter, not raw JSON
-    for (const auto& [k, v] : e["params"].items())
-      ps += fmt::format("{}{} = {}", ps.empty() ? "" : ", ", k,
-                        v.is_number() ? fmt::format("{:.4g}", v.get<double>()) : "n/a");
-    rows += fmt::format(
-        "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{:.1f}</td><td>{:.1f}</td><td>{:.3f}</td>"
-        "<td>{}</td><td>{}</td></tr>\n",
-        e["accepted"].get<bool>() ? " class=\"ok\"" : "", e["name"].get<std::string>(),
-        plot::xml_escape(e["stage"].get<std::string>()), plot::xml_escape(ps),
-        e["heldout_rmse_before_n"].get<double>(), e["heldout_rmse_after_n"].get<double>(),
-        e["gain"].get<double>(),
-        e["delta_bic"].is_number() ? fmt::format("{:.1f}", e["delta_bic"].get<double>())
-                                   : std::string("(found on the roller runs)"),
-        plot::xml_escape(e["decision"].get<std::string>()));
-  }
+  for (const auto& e : doc["effects"]) rows += effect_row(e);
+  for (const auto& e : doc["stopping_round"]) rows += effect_row(e);
   // The same residual cut three ways (slip region, phase of the stop, run): one group each, so
   // each group's shares sum to 100 % (in one list they summed to 300 %).
   std::string where;

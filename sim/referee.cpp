@@ -154,13 +154,14 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   t.truth = inj;
   t.verdict = rep.verdict;
   t.notes = rep.notes;
-  for (const auto& e : rep.effects) {
-    std::string params;
-    for (const auto& [name, value] : e.params) params += fmt::format(" {} {:.4g}", name, value);
-    t.scores.push_back(fmt::format("round {} {}{}: gain {:.3f}, dBIC {:.1f}, {}", e.round + 1,
-                                   gap::to_string(e.effect), params, e.gain, e.delta_bic,
-                                   e.decision));
-  }
+  for (const auto* list : {&rep.effects, &rep.stopping_round})
+    for (const auto& e : *list) {
+      std::string params;
+      for (const auto& [name, value] : e.params) params += fmt::format(" {} {:.4g}", name, value);
+      t.scores.push_back(fmt::format("round {} {}{}: gain {:.3f}, dBIC {:.1f}, {}", e.round + 1,
+                                     gap::to_string(e.effect), params, e.gain, e.delta_bic,
+                                     e.decision));
+    }
   t.estimate = NAN;
   t.estimate2 = NAN;
   for (const auto& e : rep.effects)

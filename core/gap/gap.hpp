@@ -195,7 +195,13 @@ struct EffectReach {
 struct Report {
   std::vector<std::string> verdict;
   std::vector<EffectScore> effects;  ///< first round: every candidate alone on the baseline
-  std::vector<Effect> accepted;      ///< the baseline's nuisances first, then the named effects
+  /// Where forward selection stopped after choosing an effect: the round that took none, each
+  /// candidate scored beside the effects chosen and why it was not taken (empty where round 1
+  /// took none, or where selection stopped at its depth). The checks after selection (a veto, a
+  /// pair in its place) leave it as selection ran; the notes say what they changed. What a
+  /// `..., unexplained` verdict's reader asks first: what the rest did once the first was in.
+  std::vector<EffectScore> stopping_round;
+  std::vector<Effect> accepted;  ///< the baseline's nuisances first, then the named effects
   /// Terms in every fit, the baseline too (ReferenceBias), not effects: before.params has theirs.
   std::vector<Effect> baseline_effects;
   std::vector<WhereRow> where;

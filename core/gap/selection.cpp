@@ -70,6 +70,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   double& current_heldout = sel.heldout_n;
   std::optional<std::vector<Run>>& entry_runs = sel.entry_runs;
   std::map<Effect, EffectScore> latest;  // each candidate's score in the last round it was scored
+  rep.stopping_round.clear();
   for (std::size_t round = 0; round < o.max_effects; ++round) {
     std::vector<EffectScore> scores;
     std::vector<Fit> fits;
@@ -300,7 +301,10 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
     }
     if (round == 0) rep.effects = scores;
     for (const auto& e : scores) latest[e.effect] = e;
-    if (pick == order.size()) break;
+    if (pick == order.size()) {
+      if (round > 0) rep.stopping_round = scores;
+      break;
+    }
     const EffectScore& best = scores[order[pick]];
     if (round > 0) rep.effects.push_back(best);
     chosen = models[order[pick]];

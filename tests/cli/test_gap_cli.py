@@ -141,6 +141,33 @@ class Gap(unittest.TestCase):
                 self.assertTrue(os.path.exists(os.path.join(d, f)), f)
             self.assertEqual(len(svg_series(os.path.join(d, "residual.svg"))[1]), 3)
 
+    def test_where_selection_stopped_each_candidate_is_shown_beside_the_effect_named(self):
+        # The shipped 1.0 bar ground runs end `relaxation_length, unexplained`: the reader's next
+        # question is what the other candidates did once the relaxation was in.
+        runs = recorded("ground_1p0bar_*.log")
+        with tempfile.TemporaryDirectory() as d:
+            r = run("gap", "--json", "--report", d, *runs)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(os.path.join(d, "index.html")) as f:
+                self.assertIn("forward selection round 2, none taken", f.read())
+        doc = json.loads(r.stdout)
+        self.assertEqual(doc["verdict"], ["relaxation_length", "unexplained"], doc["notes"])
+        stop = doc["stopping_round"]
+        self.assertGreaterEqual(len(stop), 5)
+        for e in stop:
+            self.assertEqual(e["stage"], "forward selection round 2, none taken")
+            self.assertFalse(e["accepted"])
+            self.assertNotEqual(e["name"], "relaxation_length")
+            self.assertTrue(e["decision"], e)
+            self.assertAlmostEqual(e["gain"], 1 - e["heldout_rmse_after_n"] / e["heldout_rmse_before_n"], 9)
+        text = run("gap", *runs)
+        self.assertEqual(text.returncode, 0, text.stderr)
+        self.assertIn("forward selection's round 2, none taken", text.stdout)
+        # The shipped roller runs name three effects, selection's depth: no round stopped it.
+        doc = json.loads(run("gap", "--json", *recorded("roller_2p2bar_*.log")).stdout)
+        self.assertEqual(len(doc["verdict"]), 3)
+        self.assertEqual(doc["stopping_round"], [])
+
     def test_one_run_is_not_enough(self):
         # One file with one event: a usage slip (64); two files, one of them without a usable
         # event: the data (65).

@@ -1,6 +1,7 @@
 """The gap referee writes its own results file (issue 34): the tables of a run in a section of
 a Markdown file, with the command and the commit at its head; a later run of the same key
 replaces its section and leaves the rest of the file as it was."""
+import json
 import os
 import re
 import subprocess
@@ -76,6 +77,23 @@ class RefereeResults(unittest.TestCase):
             r = referee("--trials", "1", "--export-hz", bad)
             self.assertEqual(r.returncode, 64, bad)
             self.assertIn("--export-hz", r.stderr)
+
+    def test_crossed_only_runs_the_rows_whose_gates_are_another_generators(self):
+        r = subprocess.run([REFEREE, "--condition", "roller", "--generators", "A,B", "--crossed",
+                            "only", "--trials", "1", "--trials-other", "1", "--calibrate", "1",
+                            "--misspecified", "0", "--threads", "2"],
+                           capture_output=True, text=True, timeout=600)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        doc = json.loads(r.stdout.strip().splitlines()[-1])
+        rows = [(c["trial_generator"], c["gate_generator"], c["crossed"])
+                for c in doc["conditions"]]
+        self.assertEqual(sorted(rows), [("A", "B", True), ("B", "A", True)])
+
+    def test_a_crossed_value_it_does_not_know_is_an_error_naming_the_option(self):
+        r = referee("--trials", "1", "--crossed", "sometimes")
+        self.assertEqual(r.returncode, 64)
+        self.assertIn("--crossed", r.stderr)
+        self.assertIn("sometimes", r.stderr)
 
     def test_a_generator_that_fails_stops_the_referee_instead_of_counting_refusals(self):
         # A set never made is not a set the diagnosis refused: the calibration once counted 20

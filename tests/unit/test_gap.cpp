@@ -217,6 +217,17 @@ TEST(Gap, BrakeThresholdIsFoundWithItsMagnitude) {
   }
   EXPECT_LT(r.gap_after_rmse_n, 0.15 * r.gap_before_rmse_n);
   EXPECT_LT(r.gap_after_rmse_n, 1.2 * r.noise_n);
+  // Where forward selection stopped: round 2, every other candidate scored beside the threshold,
+  // none taken, each with its reason (what a reader of the verdict asks next).
+  ASSERT_EQ(r.verdict, std::vector<std::string>{"brake_threshold"});
+  ASSERT_FALSE(r.stopping_round.empty());
+  for (const auto& e : r.stopping_round) {
+    EXPECT_EQ(e.round, 1) << gap::to_string(e.effect);
+    EXPECT_FALSE(e.accepted);
+    EXPECT_NE(e.effect, gap::Effect::BrakeThreshold);
+    EXPECT_FALSE(e.decision.empty()) << gap::to_string(e.effect);
+    EXPECT_LT(e.gain, 0.5) << gap::to_string(e.effect);  // the threshold left nothing to take
+  }
   // The runs' spread of every parameter of the model named: three folds, each left out.
   ASSERT_EQ(r.after_spread.size(), r.after.params.size());
   const auto names = gap::param_names(r.accepted);
