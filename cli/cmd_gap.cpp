@@ -283,20 +283,15 @@ void add_gap_command(CLI::App& app) {
         rep.gap_before_rmse_n, rep.gap_after_rmse_n,
         rep.gap_before_rmse_n > 0 ? 100 * (1 - rep.gap_after_rmse_n / rep.gap_before_rmse_n) : 0.0,
         rep.noise_n, rep.floor.force_n, rep.floor.slip_sd_ratio, rep.floor.slip_n);
-    // Round 1 (each alone), the rounds that named an effect, then the round that stopped.
-    for (int stage = 0; stage < 3; ++stage) {
+    // A table of scores (those `keep` takes) under its title; nothing where none is kept.
+    const auto table = [](const std::string& title, const std::vector<gap::EffectScore>& scores,
+                          auto keep) {
       bool header = false;
-      for (const auto& e : stage == 2 ? rep.stopping_round : rep.effects) {
-        if (stage < 2 && (e.round > 0) != (stage == 1)) continue;
+      for (const auto& e : scores) {
+        if (!keep(e)) continue;
         if (!header) {
-          std::cout << (stage == 0   ? std::string("each effect alone against the baseline:\n")
-                        : stage == 1 ? std::string("forward selection (each scored against the "
-                                                   "model chosen before it):\n")
-                                     : fmt::format("forward selection's round {}, none taken "
-                                                   "(each beside the effects it chose before; "
-                                                   "the checks after it are in the notes):\n",
-                                                   e.round + 1));
-          std::cout << fmt::format("  {:<18} {:<32} {:>9} {:>9}  {}\n", "effect", "parameters",
+          std::cout << title
+                    << fmt::format("  {:<18} {:<32} {:>9} {:>9}  {}\n", "effect", "parameters",
                                    "gain", "dBIC", "decision");
           header = true;
         }
@@ -307,7 +302,16 @@ void add_gap_command(CLI::App& app) {
         std::cout << fmt::format("  {:<18} {:<32} {:>9.3f} {}  {}\n", gap::to_string(e.effect), ps,
                                  e.gain, bic, e.decision);
       }
-    }
+    };
+    table("each effect alone against the baseline:\n", rep.effects,
+          [](const gap::EffectScore& e) { return e.round == 0; });
+    table("forward selection (each scored against the model chosen before it):\n", rep.effects,
+          [](const gap::EffectScore& e) { return e.round > 0; });
+    if (!rep.stopping_round.empty())
+      table(fmt::format("forward selection's round {}, none taken (each beside the effects it "
+                        "chose before; the checks after it are in the notes):\n",
+                        rep.stopping_round.front().round + 1),
+            rep.stopping_round, [](const gap::EffectScore&) { return true; });
     for (const auto& n : rep.notes) std::cout << "note: " << n << "\n";
     if (scaling)
       std::cout << fmt::format(
