@@ -312,6 +312,19 @@ void add_gap_command(CLI::App& app) {
                         "chose before; the checks after it are in the notes):\n",
                         rep.stopping_round.front().round + 1),
             rep.stopping_round, [](const gap::EffectScore&) { return true; });
+    if (!rep.pairs_tried.empty())
+      std::cout << "pairs fitted together (each: the error held out, or in-sample where marked; "
+                   "the gain over the baseline's; what each adds over the other alone):\n";
+    for (const auto& q : rep.pairs_tried) {
+      std::string ps;
+      for (const auto* m : {&q.a, &q.b})
+        for (const auto& [k, v] : m->params) ps += fmt::format("{} {:.4g} ", k, v);
+      std::cout << fmt::format(
+          "  {:<36} {:<40} {:>8.1f} N {:>7.3f} {:>7.3f} {:>7.3f}{}  {}\n",
+          fmt::format("{} + {}", gap::to_string(q.a.effect), gap::to_string(q.b.effect)), ps,
+          q.rmse_after_n, q.gain, q.gain_over_a, q.gain_over_b, q.in_sample ? " in-sample" : "",
+          q.decision);
+    }
     for (const auto& n : rep.notes) std::cout << "note: " << n << "\n";
     if (scaling)
       std::cout << fmt::format(

@@ -23,16 +23,44 @@ std::string effect_row(const nlohmann::ordered_json& e) {
   for (const auto& [k, v] : e["params"].items())
     ps += fmt::format("{}{} = {}", ps.empty() ? "" : ", ", k,
                       v.is_number() ? fmt::format("{:.4g}", v.get<double>()) : "n/a");
+  // A pair at the end of a range was not scored: its numbers are null.
+  const auto cell = [](const nlohmann::ordered_json& v, int digits) {
+    return v.is_number() ? fmt::format("{:.{}f}", v.get<double>(), digits) : std::string("n/a");
+  };
   return fmt::format(
-      "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{:.1f}</td><td>{:.1f}</td><td>{:.3f}</td>"
+      "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
       "<td>{}</td><td>{}</td></tr>\n",
       e["accepted"].get<bool>() ? " class=\"ok\"" : "", e["name"].get<std::string>(),
       plot::xml_escape(e["stage"].get<std::string>()), plot::xml_escape(ps),
-      e["heldout_rmse_before_n"].get<double>(), e["heldout_rmse_after_n"].get<double>(),
-      e["gain"].get<double>(),
-      e["delta_bic"].is_number() ? fmt::format("{:.1f}", e["delta_bic"].get<double>())
-                                 : std::string("(found on the roller runs)"),
+      cell(e["heldout_rmse_before_n"], 1), cell(e["heldout_rmse_after_n"], 1), cell(e["gain"], 3),
+      e["delta_bic"].is_number()   ? fmt::format("{:.1f}", e["delta_bic"].get<double>())
+      : e["delta_bic"].is_string() ? e["delta_bic"].get<std::string>()
+                                   : std::string("(found on the roller runs)"),
       plot::xml_escape(e["decision"].get<std::string>()));
+}
+
+/// A pair the pair search fitted, as a row of the same table (gap.json's pairs_tried shape).
+std::string pair_row(const nlohmann::ordered_json& q) {
+  nlohmann::ordered_json e;
+  const auto names = q["names"].get<std::vector<std::string>>();
+  e["name"] = fmt::format("{}", fmt::join(names, " + "));
+  e["stage"] = q["judged"] == "in_sample" ? "pair search, in-sample" : "pair search, held out";
+  nlohmann::ordered_json params;
+  for (const auto& [effect, ps] : q["params"].items())
+    for (const auto& [k, v] : ps.items()) params[k] = v;
+  e["params"] = params;
+  e["heldout_rmse_before_n"] = q["rmse_before_n"];
+  e["heldout_rmse_after_n"] = q["rmse_after_n"];
+  e["gain"] = q["gain"];
+  e["delta_bic"] = q["delta_bic"].is_number() ? q["delta_bic"] : nlohmann::ordered_json("n/a");
+  e["accepted"] = q["accepted"];
+  std::string adds;
+  for (const auto& [effect, g] : q["gain_over_the_other_alone"].items())
+    adds += fmt::format("{}{} {}", adds.empty() ? "" : ", ", effect,
+                        g.is_number() ? fmt::format("{:.3f}", g.get<double>()) : "n/a");
+  e["decision"] = fmt::format("{} (each adds over the other alone: {})",
+                              q["decision"].get<std::string>(), adds);
+  return effect_row(e);
 }
 
 nlohmann::ordered_json params_json(const gap::Fit& f, const std::vector<gap::Effect>& effects) {
@@ -99,6 +127,29 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
   j["effects"] = scores_json(r.effects, false);
   // Where forward selection stopped after naming an effect: what each candidate did beside it.
   j["stopping_round"] = scores_json(r.stopping_round, true);
+  // Where the pair search ran: each pair fitted together, and why it was or was not named.
+  j["pairs_tried"] = nlohmann::ordered_json::array();
+  for (const auto& q : r.pairs_tried) {
+    nlohmann::ordered_json x, params, adds;
+    for (const auto* m : {&q.a, &q.b}) {
+      nlohmann::ordered_json p;
+      for (const auto& [k, v] : m->params) p[k] = num(v);
+      params[gap::to_string(m->effect)] = p;
+    }
+    adds[gap::to_string(q.a.effect)] = num(q.gain_over_a);
+    adds[gap::to_string(q.b.effect)] = num(q.gain_over_b);
+    x["names"] = {gap::to_string(q.a.effect), gap::to_string(q.b.effect)};
+    x["params"] = params;
+    x["judged"] = q.in_sample ? "in_sample" : "held_out";
+    x["rmse_before_n"] = num(q.rmse_before_n);
+    x["rmse_after_n"] = num(q.rmse_after_n);
+    x["gain"] = num(q.gain);
+    x["gain_over_the_other_alone"] = adds;
+    x["delta_bic"] = num(q.delta_bic);
+    x["accepted"] = q.accepted;
+    x["decision"] = q.decision;
+    j["pairs_tried"].push_back(x);
+  }
   j["where"] = nlohmann::ordered_json::array();
   for (const auto& w : r.where)
     j["where"].push_back(
@@ -181,6 +232,7 @@ void write_report(const std::string& dir, const gap::Report& r, const std::vecto
   std::string rows;
   for (const auto& e : doc["effects"]) rows += effect_row(e);
   for (const auto& e : doc["stopping_round"]) rows += effect_row(e);
+  for (const auto& q : doc["pairs_tried"]) rows += pair_row(q);
   // The same residual cut three ways (slip region, phase of the stop, run): one group each, so
   // each group's shares sum to 100 % (in one list they summed to 300 %).
   std::string where;
@@ -215,7 +267,7 @@ noise floor {:.1f} N (force channel {:.1f} N, slip noise through the slope {:.1f
 least {:.3f} and its BIC drops by at least {:.1f} (gates calibrated on null data of this
 condition).</p>
 <ul>{}</ul>
-<h2>Which effect (each candidate alone on the baseline, then forward selection)</h2>
+<h2>Which effect (each candidate alone on the baseline, forward selection, the pairs fitted together)</h2>
 <table><tr><th>effect</th><th>stage</th><th>parameters</th><th>held-out before [N]</th><th>after [N]</th><th>gain</th><th>ΔBIC</th><th>decision</th></tr>
 {}</table>
 <h2>Where the baseline misses</h2>

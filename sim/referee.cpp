@@ -162,6 +162,17 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
                                      gap::to_string(e.effect), params, e.gain, e.delta_bic,
                                      e.decision));
     }
+  for (const auto& q : rep.pairs_tried) {
+    std::string params;
+    for (const auto* m : {&q.a, &q.b})
+      for (const auto& [name, value] : m->params) params += fmt::format(" {} {:.4g}", name, value);
+    t.scores.push_back(fmt::format(
+        "pair {} + {}{}: {} {:.1f} N (baseline {:.1f} N), gain {:.3f}, each adds {:.3f} and "
+        "{:.3f}, dBIC {:.1f}, {}",
+        gap::to_string(q.a.effect), gap::to_string(q.b.effect), params,
+        q.in_sample ? "in-sample" : "held out", q.rmse_after_n, q.rmse_before_n, q.gain,
+        q.gain_over_a, q.gain_over_b, q.delta_bic, q.decision));
+  }
   t.estimate = NAN;
   t.estimate2 = NAN;
   for (const auto& e : rep.effects)

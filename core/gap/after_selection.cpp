@@ -177,7 +177,8 @@ void check_selection(Report& rep, Selection& sel, const Fitter& fit, const Optio
     if (auto p =
             search_pairs(entry, rep.baseline_effects, rep.effects, rep.gap_before_rmse_n,
                          sel.heldout_n, rep.before, fit, rep.noise_n,
-                         nothing_named ? std::optional(in_sample_rms(sel.fit)) : std::nullopt, o)) {
+                         nothing_named ? std::optional(in_sample_rms(sel.fit)) : std::nullopt, o,
+                         rep.pairs_tried)) {
       const std::string before_names = sel.named();
       for (auto& e : rep.effects)
         if (e.accepted) {

@@ -161,6 +161,21 @@ struct EffectScore {
   bool degenerate = false;
 };
 
+/// Two candidates fitted together by the pair search (pair_search.cpp), and why the pair was or
+/// was not named.
+struct PairScore {
+  EffectScore a, b;  ///< the members at the pair fit's values, the one that adds more first
+  /// The baseline's error and the pair's: held out, or in-sample where in_sample.
+  double rmse_before_n = NAN, rmse_after_n = NAN;
+  double gain = NAN;         ///< 1 - after / before
+  double gain_over_a = NAN;  ///< the pair against b alone: what a adds beside b
+  double gain_over_b = NAN;
+  double delta_bic = NAN;  ///< against the baseline
+  bool in_sample = false;  ///< a load-transfer pair judged in-sample
+  bool accepted = false;
+  std::string decision;
+};
+
 struct WhereRow {
   std::string region;
   double rms_residual_n = 0.0;
@@ -201,6 +216,11 @@ struct Report {
   /// pair in its place) leave it as selection ran; the notes say what they changed. What a
   /// `..., unexplained` verdict's reader asks first: what the rest did once the first was in.
   std::vector<EffectScore> stopping_round;
+  /// Where the pair search ran (a structured gap left with at most two effects named): the
+  /// pairs of round 1's candidates fitted together, in the order they were judged (least error
+  /// first), each with why it was or was not named. What a reader asks of a second effect that
+  /// was expected and not named.
+  std::vector<PairScore> pairs_tried;
   std::vector<Effect> accepted;  ///< the baseline's nuisances first, then the named effects
   /// Terms in every fit, the baseline too (ReferenceBias), not effects: before.params has theirs.
   std::vector<Effect> baseline_effects;

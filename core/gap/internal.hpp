@@ -294,12 +294,13 @@ struct PairFound {
 /// the fit-quality factor x the floor (noise_n) in-sample. Without left_in_sample_n (forward
 /// selection named an effect, which held out explains part of the gap) no pair is judged
 /// in-sample: a truck's time offset, its residual's rest fitted by load transfer in-sample, was
-/// said `load_transfer` first.
+/// said `load_transfer` first. tried: every pair fitted, in the order judged, and why it was or
+/// was not named (Report::pairs_tried).
 std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::vector<Effect>& base,
                                       const std::vector<EffectScore>& round1, double gap_before_n,
                                       double left_n, const Fit& base_fit, const Fitter& fit,
                                       double noise_n, std::optional<double> left_in_sample_n,
-                                      const Options& o);
+                                      const Options& o, std::vector<PairScore>& tried);
 
 /// A relaxation length or time offset named beside later effects, replaced by its twin
 /// (lag_swap.cpp).

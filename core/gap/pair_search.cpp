@@ -11,6 +11,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <tuple>
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
@@ -31,9 +32,10 @@ bool inside(const std::vector<Effect>& model, Effect e, const Fit& f) {
 /// Puts the member that contributes more first (the verdict's order is the model's), then
 /// names the pair only when it explains the gap as a first effect must (the fit-quality share),
 /// does better than forward selection by the gain gate, passes the BIC margin for its two
-/// effects, neither member could be dropped, and each has the evidence only it leaves.
-bool passes(PairFound& p, double gap_before_n, double left_n, const std::vector<Run>& runs,
-            const Options& o) {
+/// effects, neither member could be dropped, and each has the evidence only it leaves. Returns
+/// why it is not named (nothing: it is).
+std::optional<std::string> refusal(PairFound& p, double gap_before_n, double left_n,
+                                   const std::vector<Run>& runs, const Options& o) {
   const bool lt_first = is_load_transfer(p.b.effect) && !is_load_transfer(p.a.effect);
   if (p.in_sample ? lt_first : p.gain_over_b > p.gain_over_a) {
     // a's and b's blocks are the fit's last two, side by side: b's goes first.
@@ -48,18 +50,52 @@ bool passes(PairFound& p, double gap_before_n, double left_n, const std::vector<
     std::swap(p.gain_over_a, p.gain_over_b);
   }
   const double after_n = p.in_sample ? p.in_sample_n : p.heldout_n;
-  if (p.gain < o.min_first_gain || after_n > (1.0 - o.gate_gain) * left_n ||
-      p.delta_bic > -2.0 * bic_margin_for(o, p.fit.points) || p.gain_over_a < o.gate_gain ||
-      p.gain_over_b < o.gate_gain)
-    return false;
+  const double margin = 2.0 * bic_margin_for(o, p.fit.points);
+  if (p.gain < o.min_first_gain)
+    return fmt::format("explains {:.0f} % of the gap, under the {:.0f} % a pair must", 100 * p.gain,
+                       100 * o.min_first_gain);
+  if (after_n > (1.0 - o.gate_gain) * left_n)
+    return fmt::format(
+        "leaves {:.1f} N: not the gain gate ({:.3f}) below the {:.1f} N forward "
+        "selection left",
+        after_n, o.gate_gain, left_n);
+  if (p.delta_bic > -margin)
+    return fmt::format("BIC drop {:.1f}, under twice the margin ({:.1f})", -p.delta_bic, margin);
+  for (const auto& [m, other, g] :
+       {std::tuple{&p.a, &p.b, p.gain_over_a}, std::tuple{&p.b, &p.a, p.gain_over_b}})
+    if (g < o.gate_gain)
+      return fmt::format("{} adds {:.3f} over {} alone, under the gain gate {:.3f}",
+                         to_string(m->effect), g, to_string(other->effect), o.gate_gain);
   for (EffectScore* m : {&p.a, &p.b}) {
     m->gain = p.gain;
     m->delta_bic = p.delta_bic;
     m->heldout_rmse_before_n = gap_before_n;
     m->heldout_rmse_after_n = after_n;
-    if (missing_evidence(*m, p.model, p.fit, runs)) return false;
+    if (const auto missing = missing_evidence(*m, p.model, p.fit, runs))
+      return fmt::format("{}: {}", to_string(m->effect), missing->decision);
   }
-  return true;
+  return std::nullopt;
+}
+
+bool passes(PairFound& p, double gap_before_n, double left_n, const std::vector<Run>& runs,
+            const Options& o) {
+  return !refusal(p, gap_before_n, left_n, runs, o);
+}
+
+/// The pair as the report lists it.
+PairScore pair_score(const PairFound& p, double before_n, std::string decision) {
+  PairScore s;
+  s.a = p.a;
+  s.b = p.b;
+  s.rmse_before_n = before_n;
+  s.rmse_after_n = p.in_sample ? p.in_sample_n : p.heldout_n;
+  s.gain = p.gain;
+  s.gain_over_a = p.gain_over_a;
+  s.gain_over_b = p.gain_over_b;
+  s.delta_bic = p.delta_bic;
+  s.in_sample = p.in_sample;
+  s.decision = std::move(decision);
+  return s;
 }
 
 /// A member that another candidate replaces beside the same partner, the pair passing and
@@ -96,7 +132,7 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
                                       const std::vector<EffectScore>& round1, double gap_before_n,
                                       double left_n, const Fit& base_fit, const Fitter& fit,
                                       double noise_n, std::optional<double> left_in_sample_n,
-                                      const Options& o) {
+                                      const Options& o, std::vector<PairScore>& tried) {
   std::vector<const EffectScore*> scored;
   for (const auto& s : round1)
     if (s.round == 0 && !is_nuisance(s.effect)) scored.push_back(&s);
@@ -124,12 +160,26 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
     return alone_in_sample[e];
   };
   std::vector<PairFound> found, found_in_sample;
+  std::vector<PairScore> at_range_end;  // listed after the pairs judged
+  tried.clear();
   for (const auto& [a, b] : pairs) {
     std::vector<Effect> model = base;
     model.push_back(a);
     model.push_back(b);
     Fit f = fit(pointers(runs), model);
-    if (!inside(model, a, f) || !inside(model, b, f)) continue;
+    if (!inside(model, a, f) || !inside(model, b, f)) {
+      PairScore s;
+      s.a = score_at(a, model, f);
+      s.b = score_at(b, model, f);
+      const Effect end = inside(model, a, f) ? b : a;
+      const auto j = param_at_bound(model, end, f);
+      s.decision =
+          j ? fmt::format("{}'s {} at the end of its physical range ({:.4g})", to_string(end),
+                          effect_params(end)[*j].name, f.params[*param_offset(model, end) + *j])
+            : fmt::format("{} not in the model", to_string(end));
+      at_range_end.push_back(std::move(s));
+      continue;
+    }
     PairFound p;
     p.model = model;
     p.heldout_n = heldout(runs, model, fit);
@@ -164,23 +214,48 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
   std::stable_sort(found.begin(), found.end(), [](const PairFound& x, const PairFound& y) {
     return x.heldout_n < y.heldout_n;
   });
-  for (PairFound& p : found)
-    if (passes(p, gap_before_n, left_n, runs, o)) {
-      note_alike_members(p, found, gap_before_n, left_n, runs, o);
-      return std::move(p);
+  std::optional<PairFound> named;
+  for (PairFound& p : found) {
+    if (named) {
+      tried.push_back(pair_score(p, gap_before_n, "a pair with less held-out error was named"));
+      continue;
     }
-  if (!left_in_sample_n) return std::nullopt;
+    const auto why = refusal(p, gap_before_n, left_n, runs, o);
+    tried.push_back(pair_score(p, gap_before_n, why.value_or("named")));
+    if (!why) {
+      tried.back().accepted = true;
+      note_alike_members(p, found, gap_before_n, left_n, runs, o);
+      named = std::move(p);
+    }
+  }
   // In-sample, a load-transfer pair must also leave no structure: its in-sample error within
   // the fit-quality factor x the floor (a curve that is not a Magic Formula, reshaped by the
   // load, leaves some).
-  std::stable_sort(
-      found_in_sample.begin(), found_in_sample.end(),
-      [](const PairFound& x, const PairFound& y) { return x.in_sample_n < y.in_sample_n; });
-  for (PairFound& p : found_in_sample) {
-    if (p.in_sample_n > o.noise_factor * noise_n) break;
-    if (passes(p, in_sample_rms(base_fit), *left_in_sample_n, runs, o)) return std::move(p);
+  if (!named && left_in_sample_n) {
+    std::stable_sort(
+        found_in_sample.begin(), found_in_sample.end(),
+        [](const PairFound& x, const PairFound& y) { return x.in_sample_n < y.in_sample_n; });
+    const double floor_n = o.noise_factor * noise_n, base_n = in_sample_rms(base_fit);
+    for (PairFound& p : found_in_sample) {
+      if (named || p.in_sample_n > floor_n) {
+        tried.push_back(pair_score(
+            p, base_n,
+            named ? "a pair with less in-sample error was named"
+                  : fmt::format("leaves {:.1f} N in-sample, over the fit-quality factor x the "
+                                "floor ({:.1f} N)",
+                                p.in_sample_n, floor_n)));
+        continue;
+      }
+      const auto why = refusal(p, base_n, *left_in_sample_n, runs, o);
+      tried.push_back(pair_score(p, base_n, why.value_or("named")));
+      if (!why) {
+        tried.back().accepted = true;
+        named = std::move(p);
+      }
+    }
   }
-  return std::nullopt;
+  for (PairScore& s : at_range_end) tried.push_back(std::move(s));
+  return named;
 }
 
 }  // namespace brakefit::gap

@@ -71,6 +71,7 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
   std::optional<std::vector<Run>>& entry_runs = sel.entry_runs;
   std::map<Effect, EffectScore> latest;  // each candidate's score in the last round it was scored
   rep.stopping_round.clear();
+  rep.pairs_tried.clear();
   for (std::size_t round = 0; round < o.max_effects; ++round) {
     std::vector<EffectScore> scores;
     std::vector<Fit> fits;

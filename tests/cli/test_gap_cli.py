@@ -141,7 +141,7 @@ class Gap(unittest.TestCase):
                 self.assertTrue(os.path.exists(os.path.join(d, f)), f)
             self.assertEqual(len(svg_series(os.path.join(d, "residual.svg"))[1]), 3)
 
-    def test_where_selection_stopped_each_candidate_is_shown_beside_the_effect_named(self):
+    def test_where_selection_stopped_and_the_pairs_tried_each_say_why(self):
         # The shipped 1.0 bar ground runs end `relaxation_length, unexplained`: the reader's next
         # question is what the other candidates did once the relaxation was in.
         runs = recorded("ground_1p0bar_*.log")
@@ -149,7 +149,9 @@ class Gap(unittest.TestCase):
             r = run("gap", "--json", "--report", d, *runs)
             self.assertEqual(r.returncode, 0, r.stderr)
             with open(os.path.join(d, "index.html")) as f:
-                self.assertIn("forward selection round 2, none taken", f.read())
+                html = f.read()
+        self.assertIn("forward selection round 2, none taken", html)
+        self.assertIn("pair search, held out", html)
         doc = json.loads(r.stdout)
         self.assertEqual(doc["verdict"], ["relaxation_length", "unexplained"], doc["notes"])
         stop = doc["stopping_round"]
@@ -160,13 +162,32 @@ class Gap(unittest.TestCase):
             self.assertNotEqual(e["name"], "relaxation_length")
             self.assertTrue(e["decision"], e)
             self.assertAlmostEqual(e["gain"], 1 - e["heldout_rmse_after_n"] / e["heldout_rmse_before_n"], 9)
+        # A structured gap left beside one effect: the pairs were searched, each with why it was
+        # not named (the relaxation beside another gains too little over it alone).
+        pairs = doc["pairs_tried"]
+        self.assertGreaterEqual(len(pairs), 10)
+        for p in pairs:
+            a, b = p["names"]
+            self.assertNotEqual(a, b)
+            self.assertEqual(set(p["params"]), {a, b})
+            self.assertFalse(p["accepted"])
+            self.assertTrue(p["decision"], p)
+            if p["rmse_after_n"] is not None:
+                self.assertAlmostEqual(p["gain"], 1 - p["rmse_after_n"] / p["rmse_before_n"], 9)
+            else:
+                self.assertIn("at the end of its physical range", p["decision"])
+        judged = [p["rmse_after_n"] for p in pairs if p["judged"] == "held_out" and p["rmse_after_n"] is not None]
+        self.assertEqual(judged, sorted(judged))
         text = run("gap", *runs)
         self.assertEqual(text.returncode, 0, text.stderr)
         self.assertIn("forward selection's round 2, none taken", text.stdout)
-        # The shipped roller runs name three effects, selection's depth: no round stopped it.
+        self.assertIn("pairs fitted together", text.stdout)
+        # The shipped roller runs name three effects, selection's depth: no round stopped it, and
+        # with three named no pair is searched.
         doc = json.loads(run("gap", "--json", *recorded("roller_2p2bar_*.log")).stdout)
         self.assertEqual(len(doc["verdict"]), 3)
         self.assertEqual(doc["stopping_round"], [])
+        self.assertEqual(doc["pairs_tried"], [])
 
     def test_one_run_is_not_enough(self):
         # One file with one event: a usage slip (64); two files, one of them without a usable

@@ -126,6 +126,24 @@ TEST(GapPairs, AHeavyWheelUnderLoadTransferIsFoundAsAPairWhereNeitherPassesAlone
             (std::set<std::string>{"load_transfer", "wheel_inertia"}));
   EXPECT_NEAR(t.estimate2, inj.magnitude2, 0.1 * inj.magnitude2);
   EXPECT_NEAR(t.estimate, inj.magnitude, 0.25 * inj.magnitude);
+  // The pairs the search fitted (the report's pairs_tried, --why's "pair" lines), in the order
+  // judged: each refused one says why, the named one is these two, the rest were not judged.
+  int tried = 0, named = 0;
+  for (const auto& s : t.scores) {
+    if (s.rfind("pair ", 0) != 0) continue;
+    ++tried;
+    if (s.ends_with(", named")) {
+      ++named;
+      EXPECT_NE(s.find("load_transfer"), std::string::npos) << s;
+      EXPECT_NE(s.find("wheel_inertia"), std::string::npos) << s;
+    } else if (named > 0) {
+      EXPECT_TRUE(s.find("a pair with less") != std::string::npos ||
+                  s.find("at the end of its physical range") != std::string::npos)
+          << s;
+    }
+  }
+  EXPECT_EQ(named, 1) << brakefit::test::why_of(t);
+  EXPECT_GE(tried, 10) << brakefit::test::why_of(t);
 }
 
 TEST(GapPairs, APairReplacesTwoNamedEffectsThatLeaveAStructuredGap) {
