@@ -13,6 +13,43 @@
 
 namespace brakefit::bench {
 
+namespace {
+
+/// Where a pair was missed, what the pair search said of the true pair (its first rule failed),
+/// or why it had none to say.
+std::string true_pair_fate(const sim::TrialResult& r) {
+  if (r.pairs_tried.empty()) {
+    const auto said = std::count_if(r.verdict.begin(), r.verdict.end(), [](const std::string& v) {
+      return v != "unexplained" && v != "none";
+    });
+    return said >= 3 ? "no pair searched: three effects named"
+                     : "no pair searched: what selection left under the fit-quality factor x the "
+                       "floor";
+  }
+  const auto twin = [&](const std::string& e) {
+    if (!r.one_speed) return e;
+    return e == "time_offset" ? std::string("relaxation_length") : e;
+  };
+  const std::string x = twin(r.truth.effect), y = twin(r.truth.effect2);
+  for (const auto& q : r.pairs_tried) {
+    const std::string a = twin(q.a), b = twin(q.b);
+    if (!((a == x && b == y) || (a == y && b == x))) continue;
+    const std::string& d = q.decision;
+    if (d == "named") return "named by the search, undone after it";
+    if (d.rfind("a pair with less", 0) == 0) return "another pair named first";
+    if (d.rfind("explains", 0) == 0) return "under the share of the gap a pair must explain";
+    if (d.rfind("leaves", 0) == 0) return "not the gain gate below what selection left";
+    if (d.rfind("BIC drop", 0) == 0) return "under twice the BIC margin";
+    if (d.find(" adds ") != std::string::npos) return "a member adds under the gain gate";
+    if (d.find("at the end of its physical range") != std::string::npos)
+      return "a member on its range's end";
+    return "a member without the evidence only it leaves";
+  }
+  return "the true pair not fitted";
+}
+
+}  // namespace
+
 nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
                                  const gap::Options& gates, const PairSettings& st,
                                  const std::string& cname) {
@@ -46,6 +83,7 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
   // Per effect not named by its own name: with a reach, and below it (beside the effects named).
   std::map<std::string, std::pair<int, int>> not_named;
   std::vector<double> load_ratio_err;  // load transfer as dFz/Fz per m/s^2, where named
+  std::map<std::string, int> fate;     // each missed pair: what the search said of the true pair
   for (std::size_t k = 0; k < results.size(); ++k) {
     const auto& r = results[k];
     const auto& inj = r.truth;
@@ -64,6 +102,7 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
         not_named[e].second += std::abs(m) < reach;
       }
     }
+    if (!r.correct()) ++fate[true_pair_fate(r)];
     if (std::isfinite(r.load_per_decel_estimate) && std::isfinite(inj.load_per_decel))
       load_ratio_err.push_back(std::abs(r.load_per_decel_estimate / inj.load_per_decel - 1));
     if (!r.correct() || st.why > 1)
@@ -94,6 +133,11 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
                             {"magnitude_error_named_median", quantile(v, 0.5)},
                             {"magnitude_error_named_p90", quantile(v, 0.9)}};
   }
+  if (!fate.empty()) {
+    std::cout << "\npairs missed, what the pair search said of the true pair:\n";
+    for (const auto& [why, count] : fate) std::cout << fmt::format("- {}: {}\n", why, count);
+  }
+  j["pairs_missed_true_pair"] = fate;
   j["counts"] = {{"pairs", n}, {"pairs_both", both}, {"pairs_exact", exact}};
   if (!load_ratio_err.empty()) {
     j["pair_load_ratio_error_named"] = {{"median", quantile(load_ratio_err, 0.5)},

@@ -134,6 +134,22 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
           "\nEffects of a pair not named by their own name, and of them below the smallest "
           "magnitude their runs could show beside the effects named (the report's reach):\n\n" +
           lines;
+    // Each missed pair: what the pair search said of the true pair (gap --json's pairs_tried).
+    std::string fates;
+    for (const auto& r : rows) {
+      if (!r.contains("pairs_missed_true_pair") || r["pairs_missed_true_pair"].empty()) continue;
+      std::string each;
+      for (const auto& [why, count] : r["pairs_missed_true_pair"].items())
+        each += fmt::format("{}{} {}", each.empty() ? "" : "; ", why, count.get<int>());
+      fates += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
+                           r["trial_generator"].get<std::string>(),
+                           r["gate_generator"].get<std::string>(), each);
+    }
+    if (!fates.empty())
+      out +=
+          "\nPairs missed, and what the pair search said of the true pair (the first rule it "
+          "failed, or why it had none):\n\n" +
+          fates;
   }
   if (std::any_of(rows.begin(), rows.end(),
                   [](const auto& r) { return r["counts"].contains("outside"); })) {

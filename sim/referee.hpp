@@ -95,6 +95,11 @@ struct TrialResult {
   /// Each candidate's score as the report's table gives it (round, effect, parameters, gain,
   /// BIC drop, decision): what the referee's --why prints under a miss.
   std::vector<std::string> scores;
+  /// The pairs the pair search fitted (the report's pairs_tried): the two names and the decision.
+  struct PairTried {
+    std::string a, b, decision;
+  };
+  std::vector<PairTried> pairs_tried;
   double estimate = 0.0;   ///< the injected effect's parameter when fitted alone (NaN for none)
   double estimate2 = 0.0;  ///< a pair's second effect's, as estimate
   /// Load transfer's dFz/Fz per m/s^2 where it was named (NaN: not named).

@@ -67,6 +67,22 @@ class RefereeResults(unittest.TestCase):
             self.assertNotIn("Detection", again)
             self.assertTrue(again.startswith("# Results\n\nWritten by hand, kept.\n"))
 
+    def test_each_missed_pair_says_what_the_pair_search_said_of_the_true_pair(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "results.md")
+            r = referee("--trials", "0", "--pairs", "8", "--results", path)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            doc = json.loads(r.stdout.strip().splitlines()[-1])
+            row = doc["conditions"][0]
+            missed = row["counts"]["pairs"] - row["counts"]["pairs_both"]
+            fates = row["pairs_missed_true_pair"]
+            self.assertEqual(sum(fates.values()), missed, fates)
+            text = read(path)
+            self.assertEqual("Pairs missed, and what the pair search said" in text, missed > 0, text)
+            for why, count in fates.items():
+                self.assertIn(f"{why} {count}", text)
+                self.assertIn(f"- {why}: {count}", r.stdout)
+
     def test_an_unwritable_results_file_is_an_error_naming_it(self):
         r = referee("--trials", "1", "--results", "/nonexistent/dir/results.md")
         self.assertNotEqual(r.returncode, 0)
