@@ -140,7 +140,7 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
       if (!r.contains("pairs_missed_true_pair") || r["pairs_missed_true_pair"].empty()) continue;
       std::string each;
       for (const auto& [why, count] : r["pairs_missed_true_pair"].items())
-        each += fmt::format("{}{} {}", each.empty() ? "" : "; ", why, count.get<int>());
+        each += fmt::format("{}{} ({})", each.empty() ? "" : "; ", why, count.get<int>());
       fates += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
                            r["trial_generator"].get<std::string>(),
                            r["gate_generator"].get<std::string>(), each);

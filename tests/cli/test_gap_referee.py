@@ -80,7 +80,7 @@ class RefereeResults(unittest.TestCase):
             text = read(path)
             self.assertEqual("Pairs missed, and what the pair search said" in text, missed > 0, text)
             for why, count in fates.items():
-                self.assertIn(f"{why} {count}", text)
+                self.assertIn(f"{why} ({count})", text)
                 self.assertIn(f"- {why}: {count}", r.stdout)
 
     def test_an_unwritable_results_file_is_an_error_naming_it(self):
