@@ -40,6 +40,13 @@ std::string row_name(const nlohmann::ordered_json& r) {
                      trials == gates ? "" : " (crossed)");
 }
 
+/// A row's item in a list under a table: "- condition trials, gates G: each".
+std::string list_item(const nlohmann::ordered_json& r, const std::string& each) {
+  return fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
+                     r["trial_generator"].get<std::string>(),
+                     r["gate_generator"].get<std::string>(), each);
+}
+
 /// One effect's misses in a list: "name below of missed", and those without a reach.
 std::string misses_below_reach(const std::string& sep, const std::string& effect, int below,
                                int missed, int with_reach) {
@@ -124,10 +131,7 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
             misses_below_reach(each.empty() ? "" : "; ", e, v["not_named_below_reach"].get<int>(),
                                missed, v["not_named_with_reach"].get<int>());
       }
-      if (!each.empty())
-        lines += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
-                             r["trial_generator"].get<std::string>(),
-                             r["gate_generator"].get<std::string>(), each);
+      if (!each.empty()) lines += list_item(r, each);
     }
     if (!lines.empty())
       out +=
@@ -141,9 +145,7 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
       std::string each;
       for (const auto& [why, count] : r["pairs_missed_true_pair"].items())
         each += fmt::format("{}{} ({})", each.empty() ? "" : "; ", why, count.get<int>());
-      fates += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
-                           r["trial_generator"].get<std::string>(),
-                           r["gate_generator"].get<std::string>(), each);
+      fates += list_item(r, each);
     }
     if (!fates.empty())
       out +=
@@ -204,13 +206,11 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
     for (const auto& [e, v] : r["magnitude_error_named"].items())
       each += fmt::format("{}{} {} ({})", each.empty() ? "" : "; ", e, percent(num(v, "median")),
                           percent(num(v, "p90")));
-    const std::string trials = r["trial_generator"], gates = r["gate_generator"];
     if (r.contains("load_ratio_error_named"))
       each += fmt::format("; load transfer as dFz/Fz per m/s^2 {} ({})",
                           percent(num(r["load_ratio_error_named"], "median")),
                           percent(num(r["load_ratio_error_named"], "p90")));
-    out += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(), trials, gates,
-                       each);
+    out += list_item(r, each);
   }
   // Each row's misses: how many lay below the smallest magnitude their runs could show.
   bool any_missed = false;
@@ -225,9 +225,7 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
     for (const auto& [e, v] : r["missed"].items())
       each += misses_below_reach(each.empty() ? "" : "; ", e, v["below_reach"].get<int>(),
                                  v["sets"].get<int>(), v["with_reach"].get<int>());
-    out += fmt::format("- {} {}, gates {}: {}\n", r["condition"].get<std::string>(),
-                       r["trial_generator"].get<std::string>(),
-                       r["gate_generator"].get<std::string>(), each);
+    out += list_item(r, each);
   }
   return out;
 }
