@@ -34,16 +34,26 @@ std::string true_pair_fate(const sim::TrialResult& r) {
   for (const auto& q : r.pairs_tried) {
     const std::string a = twin(q.a), b = twin(q.b);
     if (!((a == x && b == y) || (a == y && b == x))) continue;
-    const std::string& d = q.decision;
-    if (d == "named") return "named by the search, undone after it";
-    if (d.rfind("a pair with less", 0) == 0) return "another pair named first";
-    if (d.rfind("explains", 0) == 0) return "under the share of the gap a pair must explain";
-    if (d.rfind("leaves", 0) == 0) return "not the gain gate below what selection left";
-    if (d.rfind("BIC drop", 0) == 0) return "under twice the BIC margin";
-    if (d.find(" adds ") != std::string::npos) return "a member adds under the gain gate";
-    if (d.find("at the end of its physical range") != std::string::npos)
-      return "a member on its range's end";
-    return "a member without the evidence only it leaves";
+    switch (q.rule) {
+      case gap::PairRule::Named:
+        return "named by the search, undone after it";
+      case gap::PairRule::AnotherNamed:
+        return "another pair named first";
+      case gap::PairRule::ShareOfGap:
+        return "under the share of the gap a pair must explain";
+      case gap::PairRule::GainOverSelection:
+        return "not the gain gate below what selection left";
+      case gap::PairRule::BicMargin:
+        return "under twice the BIC margin";
+      case gap::PairRule::MemberGain:
+        return "a member adds under the gain gate";
+      case gap::PairRule::RangeEnd:
+        return "a member on its range's end";
+      case gap::PairRule::OverFloor:
+        return "in-sample over the fit-quality factor x the floor";
+      case gap::PairRule::Evidence:
+        return "a member without the evidence only it leaves";
+    }
   }
   return "the true pair not fitted";
 }

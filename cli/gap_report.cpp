@@ -147,6 +147,7 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
     x["gain_over_the_other_alone"] = adds;
     x["delta_bic"] = num(q.delta_bic);
     x["accepted"] = q.accepted;
+    x["rule"] = gap::to_string(q.rule);
     x["decision"] = q.decision;
     j["pairs_tried"].push_back(x);
   }

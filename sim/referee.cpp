@@ -163,7 +163,7 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
                                      e.decision));
     }
   for (const auto& q : rep.pairs_tried) {
-    t.pairs_tried.push_back({gap::to_string(q.a.effect), gap::to_string(q.b.effect), q.decision});
+    t.pairs_tried.push_back({gap::to_string(q.a.effect), gap::to_string(q.b.effect), q.rule});
     std::string params;
     for (const auto* m : {&q.a, &q.b})
       for (const auto& [name, value] : m->params) params += fmt::format(" {} {:.4g}", name, value);

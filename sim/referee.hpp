@@ -95,9 +95,10 @@ struct TrialResult {
   /// Each candidate's score as the report's table gives it (round, effect, parameters, gain,
   /// BIC drop, decision): what the referee's --why prints under a miss.
   std::vector<std::string> scores;
-  /// The pairs the pair search fitted (the report's pairs_tried): the two names and the decision.
+  /// The pairs the pair search fitted (the report's pairs_tried): the two names and the rule.
   struct PairTried {
-    std::string a, b, decision;
+    std::string a, b;
+    gap::PairRule rule;
   };
   std::vector<PairTried> pairs_tried;
   double estimate = 0.0;   ///< the injected effect's parameter when fitted alone (NaN for none)

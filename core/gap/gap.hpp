@@ -161,6 +161,24 @@ struct EffectScore {
   bool degenerate = false;
 };
 
+/// The rule that decided a pair of the pair search: named, or the first it failed (the share of
+/// the gap a pair must explain, the gain gate over what selection left, twice the BIC margin, a
+/// member that adds under the gain gate over the other alone, the evidence only a member leaves,
+/// a member on its range's end, in-sample over the fit-quality factor x the floor), or another
+/// pair named before it was judged.
+enum class PairRule {
+  Named,
+  ShareOfGap,
+  GainOverSelection,
+  BicMargin,
+  MemberGain,
+  Evidence,
+  RangeEnd,
+  OverFloor,
+  AnotherNamed
+};
+const char* to_string(PairRule r);
+
 /// Two candidates fitted together by the pair search (pair_search.cpp), and why the pair was or
 /// was not named.
 struct PairScore {
@@ -172,8 +190,9 @@ struct PairScore {
   double gain_over_b = NAN;
   double delta_bic = NAN;  ///< against the baseline
   bool in_sample = false;  ///< a load-transfer pair judged in-sample
-  bool accepted = false;
-  std::string decision;
+  bool accepted = false;   ///< rule == PairRule::Named
+  PairRule rule = PairRule::Named;
+  std::string decision;  ///< the rule in words, with the figures that decided it
 };
 
 struct WhereRow {

@@ -34,8 +34,12 @@ bool inside(const std::vector<Effect>& model, Effect e, const Fit& f) {
 /// does better than forward selection by the gain gate, passes the BIC margin for its two
 /// effects, neither member could be dropped, and each has the evidence only it leaves. Returns
 /// why it is not named (nothing: it is).
-std::optional<std::string> refusal(PairFound& p, double gap_before_n, double left_n,
-                                   const std::vector<Run>& runs, const Options& o) {
+struct Refusal {
+  PairRule rule;
+  std::string why;
+};
+std::optional<Refusal> refusal(PairFound& p, double gap_before_n, double left_n,
+                               const std::vector<Run>& runs, const Options& o) {
   const bool lt_first = is_load_transfer(p.b.effect) && !is_load_transfer(p.a.effect);
   if (p.in_sample ? lt_first : p.gain_over_b > p.gain_over_a) {
     // a's and b's blocks are the fit's last two, side by side: b's goes first.
@@ -52,27 +56,32 @@ std::optional<std::string> refusal(PairFound& p, double gap_before_n, double lef
   const double after_n = p.in_sample ? p.in_sample_n : p.heldout_n;
   const double margin = 2.0 * bic_margin_for(o, p.fit.points);
   if (p.gain < o.min_first_gain)
-    return fmt::format("explains {:.0f} % of the gap, under the {:.0f} % a pair must", 100 * p.gain,
-                       100 * o.min_first_gain);
+    return Refusal{PairRule::ShareOfGap,
+                   fmt::format("explains {:.0f} % of the gap, under the {:.0f} % a pair must",
+                               100 * p.gain, 100 * o.min_first_gain)};
   if (after_n > (1.0 - o.gate_gain) * left_n)
-    return fmt::format(
-        "leaves {:.1f} N: not the gain gate ({:.3f}) below the {:.1f} N forward "
-        "selection left",
-        after_n, o.gate_gain, left_n);
+    return Refusal{PairRule::GainOverSelection,
+                   fmt::format("leaves {:.1f} N: not the gain gate ({:.3f}) below the {:.1f} N "
+                               "forward selection left",
+                               after_n, o.gate_gain, left_n)};
   if (p.delta_bic > -margin)
-    return fmt::format("BIC drop {:.1f}, under twice the margin ({:.1f})", -p.delta_bic, margin);
+    return Refusal{
+        PairRule::BicMargin,
+        fmt::format("BIC drop {:.1f}, under twice the margin ({:.1f})", -p.delta_bic, margin)};
   for (const auto& [m, other, g] :
        {std::tuple{&p.a, &p.b, p.gain_over_a}, std::tuple{&p.b, &p.a, p.gain_over_b}})
     if (g < o.gate_gain)
-      return fmt::format("{} adds {:.3f} over {} alone, under the gain gate {:.3f}",
-                         to_string(m->effect), g, to_string(other->effect), o.gate_gain);
+      return Refusal{PairRule::MemberGain,
+                     fmt::format("{} adds {:.3f} over {} alone, under the gain gate {:.3f}",
+                                 to_string(m->effect), g, to_string(other->effect), o.gate_gain)};
   for (EffectScore* m : {&p.a, &p.b}) {
     m->gain = p.gain;
     m->delta_bic = p.delta_bic;
     m->heldout_rmse_before_n = gap_before_n;
     m->heldout_rmse_after_n = after_n;
     if (const auto missing = missing_evidence(*m, p.model, p.fit, runs))
-      return fmt::format("{}: {}", to_string(m->effect), missing->decision);
+      return Refusal{PairRule::Evidence,
+                     fmt::format("{}: {}", to_string(m->effect), missing->decision)};
   }
   return std::nullopt;
 }
@@ -83,8 +92,10 @@ bool passes(PairFound& p, double gap_before_n, double left_n, const std::vector<
 }
 
 /// The pair as the report lists it.
-PairScore pair_score(const PairFound& p, double before_n, std::string decision) {
+PairScore pair_score(const PairFound& p, double before_n, PairRule rule, std::string decision) {
   PairScore s;
+  s.rule = rule;
+  s.accepted = rule == PairRule::Named;
   s.a = p.a;
   s.b = p.b;
   s.rmse_before_n = before_n;
@@ -128,6 +139,30 @@ void note_alike_members(PairFound& p, const std::vector<PairFound>& pool, double
 
 }  // namespace
 
+const char* to_string(PairRule r) {
+  switch (r) {
+    case PairRule::Named:
+      return "named";
+    case PairRule::ShareOfGap:
+      return "share_of_gap";
+    case PairRule::GainOverSelection:
+      return "gain_over_selection";
+    case PairRule::BicMargin:
+      return "bic_margin";
+    case PairRule::MemberGain:
+      return "member_gain";
+    case PairRule::Evidence:
+      return "evidence";
+    case PairRule::RangeEnd:
+      return "range_end";
+    case PairRule::OverFloor:
+      return "over_floor";
+    case PairRule::AnotherNamed:
+      return "another_named";
+  }
+  return "?";
+}
+
 std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::vector<Effect>& base,
                                       const std::vector<EffectScore>& round1, double gap_before_n,
                                       double left_n, const Fit& base_fit, const Fitter& fit,
@@ -169,6 +204,7 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
     Fit f = fit(pointers(runs), model);
     if (!inside(model, a, f) || !inside(model, b, f)) {
       PairScore s;
+      s.rule = PairRule::RangeEnd;
       s.a = score_at(a, model, f);
       s.b = score_at(b, model, f);
       const Effect end = inside(model, a, f) ? b : a;
@@ -217,13 +253,14 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
   std::optional<PairFound> named;
   for (PairFound& p : found) {
     if (named) {
-      tried.push_back(pair_score(p, gap_before_n, "a pair with less held-out error was named"));
+      tried.push_back(pair_score(p, gap_before_n, PairRule::AnotherNamed,
+                                 "a pair with less held-out error was named"));
       continue;
     }
     const auto why = refusal(p, gap_before_n, left_n, runs, o);
-    tried.push_back(pair_score(p, gap_before_n, why.value_or("named")));
+    tried.push_back(why ? pair_score(p, gap_before_n, why->rule, why->why)
+                        : pair_score(p, gap_before_n, PairRule::Named, "named"));
     if (!why) {
-      tried.back().accepted = true;
       note_alike_members(p, found, gap_before_n, left_n, runs, o);
       named = std::move(p);
     }
@@ -239,7 +276,7 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
     for (PairFound& p : found_in_sample) {
       if (named || p.in_sample_n > floor_n) {
         tried.push_back(pair_score(
-            p, base_n,
+            p, base_n, named ? PairRule::AnotherNamed : PairRule::OverFloor,
             named ? "a pair with less in-sample error was named"
                   : fmt::format("leaves {:.1f} N in-sample, over the fit-quality factor x the "
                                 "floor ({:.1f} N)",
@@ -247,11 +284,9 @@ std::optional<PairFound> search_pairs(const std::vector<Run>& runs, const std::v
         continue;
       }
       const auto why = refusal(p, base_n, *left_in_sample_n, runs, o);
-      tried.push_back(pair_score(p, base_n, why.value_or("named")));
-      if (!why) {
-        tried.back().accepted = true;
-        named = std::move(p);
-      }
+      tried.push_back(why ? pair_score(p, base_n, why->rule, why->why)
+                          : pair_score(p, base_n, PairRule::Named, "named"));
+      if (!why) named = std::move(p);
     }
   }
   for (PairScore& s : at_range_end) tried.push_back(std::move(s));
