@@ -66,7 +66,8 @@ int run(int argc, char** argv) {
       std::cerr
           << "usage: gap_referee [--condition roller|ground|roller_vs_road|all] [--trials N]\n"
              "  [--trials-other N] [--null-share R] [--calibrate N] [--misspecified N]\n"
-             "  [--pairs N]           (pair trials per row: two effects at once, A and B)\n"
+             "  [--pairs N]           (pair trials per row: two effects at once; C's on the\n"
+             "                         ground only)\n"
              "  [--outside N]         (A's and B's sets with an effect outside the\n"
              "                         catalogue: a pressure transducer's bow, fading friction)\n"
              "  [--seed S] [--threads N] [--generators A,B,C] [--gen-c SCRIPT]\n"

@@ -9,6 +9,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <utility>
 
 #include "core/curve.hpp"
 #include "core/pipeline/event_csv.hpp"
@@ -44,6 +45,9 @@ double d_ln_d_per_ln_fz(const std::string& tyre, double fz_n) {
 /// The interpreter the script runs under (Debian's, where python3-numpy installs numpy).
 constexpr const char* kPython = "/usr/bin/python3";
 
+/// Two of the script's effects in one of its sets (a pair), by the script's own code.
+constexpr const char* kPairScript = BRAKEFIT_SOURCE_DIR "/bench/gen_c_pair.py";
+
 /// The script's vehicle: mass 3.4 Fz0 / g, this wheel's load Fz0 + m (h/L) a / 2.
 constexpr double kLoadPerDecelPerHoverL = 1.7 / 9.81;
 
@@ -73,11 +77,17 @@ std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& in
   const bool ground = inj.condition == gap::Condition::Ground;
   const std::string effect = inj.effect == "misspecified" ? "misspec" : inj.effect;
   const bool has_magnitude = effect != "none" && effect != "misspec";
-  const std::string cmd = fmt::format(
-      "{} '{}' '{}' --bench {} --effect {} --seed {}{} >/dev/null 2>'{}'", kPython, script,
-      dir.string(), ground ? "ground" : "roller", effect, seed % 4'000'000'000ULL,
-      has_magnitude ? fmt::format(" --magnitude {:.9g}", inj.magnitude) : "",
-      (dir / "stderr").string());
+  if (inj.pair() && inj.magnitude2 != inj.magnitude)
+    throw GeneratorError("generator C gives a set one magnitude: a pair's two must be equal");
+  // A pair: the script's own set, through bench/gen_c_pair.py, with both effects switched on.
+  const std::string what = inj.pair() ? fmt::format("'{}' '{}' --effects {},{}", kPairScript,
+                                                    script, effect, inj.effect2)
+                                      : fmt::format("'{}' --effect {}", script, effect);
+  const std::string cmd =
+      fmt::format("{} {} '{}' --bench {} --seed {}{} >/dev/null 2>'{}'", kPython, what,
+                  dir.string(), ground ? "ground" : "roller", seed % 4'000'000'000ULL,
+                  has_magnitude ? fmt::format(" --magnitude {:.9g}", inj.magnitude) : "",
+                  (dir / "stderr").string());
   if (std::system(cmd.c_str()) != 0)
     throw GeneratorError(fmt::format("generator C failed: {}: {}", cmd, slurp(dir / "stderr")));
   const auto truth = nlohmann::json::parse(slurp(dir / "truth.json"));
@@ -89,11 +99,15 @@ std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& in
     wheel_load_n = pipeline::parse_event_csv(text, name).calibration.wheel_load_n;
     sim::append_event_csv_runs(out, text, name);
   }
-  if (inj.effect == "slip_offset") inj.magnitude = -inj.magnitude;
-  if (inj.effect == "load_transfer") inj.load_per_decel = inj.magnitude * kLoadPerDecelPerHoverL;
-  if (inj.effect == "load_transfer")
-    inj.magnitude *= kLoadPerDecelPerHoverL *
-                     d_ln_d_per_ln_fz(truth.at("tyre").get<std::string>(), wheel_load_n);
+  // Each effect's truth in the diagnosis parameter's unit.
+  for (auto [e, m] : {std::pair{&inj.effect, &inj.magnitude}, {&inj.effect2, &inj.magnitude2}}) {
+    if (*e == "slip_offset") *m = -*m;
+    if (*e == "load_transfer") {
+      inj.load_per_decel = *m * kLoadPerDecelPerHoverL;
+      *m *= kLoadPerDecelPerHoverL *
+            d_ln_d_per_ln_fz(truth.at("tyre").get<std::string>(), wheel_load_n);
+    }
+  }
   return out;
 }
 

@@ -320,7 +320,10 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   if (st.outside > 0)
     j.update(run_outside(c, trial_gen, gates.options, {st.outside, st.threads, st.why}, cname),
              /*merge_objects=*/true);
-  if (st.pairs > 0 && trial_gen != sim::Generator::C && c != gap::Condition::RollerToRoad)
+  if (st.pairs > 0 && !sim::draws_pairs(c, trial_gen))
+    std::cout << fmt::format("\npairs: generator {} draws none in {}\n", sim::to_string(trial_gen),
+                             gap::to_string(c));
+  else if (st.pairs > 0)
     j.update(run_pairs(c, trial_gen, gates.options,
                        {st.pairs, st.seed, st.threads, st.why, st.only, st.pick}, cname),
              /*merge_objects=*/true);

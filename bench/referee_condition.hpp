@@ -15,7 +15,7 @@ namespace brakefit::bench {
 struct Settings {
   int threads = 2;
   int trials = 200, trials_other = 80, calib = 30, misspecified = 30;
-  int pairs = 0;    ///< --pairs: pair trials per row (A and B, roller and ground)
+  int pairs = 0;    ///< --pairs: pair trials per row (roller and ground; C on the ground)
   int outside = 0;  ///< --outside: sets outside the catalogue per row (A, B; roller, ground)
   int detection = 0, detection_levels = 6;  ///< --detection: sets per magnitude (straight rows)
   double null_share = 0.3;

@@ -1,7 +1,7 @@
 #pragma once
 // The referee's pairs: two effects injected into one set (generators A and B, roller and
-// ground), diagnosed blind; scored on whether forward selection names both, and on each one's
-// magnitude where it is named.
+// ground; generator C on the ground, two of its effects at one magnitude), diagnosed blind;
+// scored on whether forward selection names both, and on each one's magnitude where it is named.
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>

@@ -265,8 +265,8 @@ namespace {
 /// pooled points, as `brakefit gap` does without a model).
 gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
                            const gap::Options& o) {
-  if (inj.pair() && (inj.generator == Generator::C || c == gap::Condition::RollerToRoad))
-    throw InputError("pairs are drawn by generators A and B, roller and ground");
+  if (inj.pair() && c == gap::Condition::RollerToRoad)
+    throw InputError("pairs are drawn on the roller and on the ground");
   if (inj.generator == Generator::C) {
     if (c == gap::Condition::RollerToRoad || !g_outside)
       throw InputError("generator C makes roller and ground runs, through the referee's runner");

@@ -35,7 +35,8 @@ struct Injection {
   double magnitude = 0.0;       ///< in the diagnosis parameter's unit (sigma_m, p0_bar, ...)
   gap::Condition condition = gap::Condition::Roller;
   Generator generator = Generator::A;  ///< B: roller and ground conditions only
-  /// A second effect injected with the first (a pair; A and B, roller and ground), "" for none.
+  /// A second effect injected with the first (a pair; roller and ground, C's on the ground), ""
+  /// for none.
   std::string effect2 = {};
   double magnitude2 = 0.0;
   bool pair() const { return !effect2.empty(); }
@@ -58,7 +59,11 @@ Injection draw_injection(Rng& rng, double p_none, gap::Condition c = gap::Condit
 std::pair<double, double> effect_range(gap::Condition c, Generator g, const std::string& effect);
 /// Two different effects of the condition, each in its range. Lag and delay are not drawn
 /// together: at one speed they are one effect (the referee's runs of a set share a speed).
+/// Generator C: two effects whose ranges overlap, at one magnitude drawn in the overlap (its
+/// script gives a set one magnitude); InputError where it has no such two (its roller).
 Injection draw_pair(Rng& rng, gap::Condition c, Generator g = Generator::A);
+/// Whether draw_pair draws pairs of generator g in condition c.
+bool draws_pairs(gap::Condition c, Generator g);
 /// Generator B: three runs (roller: three pedal ramps; ground: 30, 50, 70 km/h) exported as event
 /// CSVs, read back through parse_event_csv and the pipeline, conditioned. The injection's
 /// magnitude is set to the drawn truth where the vehicle decides it (load transfer).

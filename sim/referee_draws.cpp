@@ -4,8 +4,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim/referee_internal.hpp"
@@ -154,10 +156,45 @@ std::pair<double, double> effect_range(gap::Condition c, Generator g, const std:
                                gap::to_string(c), to_string(g)));
 }
 
+namespace {
+
+/// Generator C's pairs: two of its effects whose ranges share a magnitude (its script gives the
+/// set one magnitude, bench/gen_c_pair.py), and not both lags.
+std::vector<std::pair<Range, Range>> outside_pairs(gap::Condition c) {
+  const auto rs = ranges(c, Generator::C);
+  std::vector<std::pair<Range, Range>> out;
+  for (std::size_t i = 0; i < rs.size(); ++i)
+    for (std::size_t k = i + 1; k < rs.size(); ++k)
+      if (std::max(rs[i].lo, rs[k].lo) < std::min(rs[i].hi, rs[k].hi) &&
+          !(detail::is_lag(rs[i].effect) && detail::is_lag(rs[k].effect)))
+        out.emplace_back(rs[i], rs[k]);
+  return out;
+}
+
+}  // namespace
+
+bool draws_pairs(gap::Condition c, Generator g) {
+  if (c == gap::Condition::RollerToRoad) return false;
+  return g != Generator::C || !outside_pairs(c).empty();
+}
+
 Injection draw_pair(Rng& rng, gap::Condition c, Generator g) {
   Injection inj;
   inj.condition = c;
   inj.generator = g;
+  if (g == Generator::C) {
+    const auto pairs = outside_pairs(c);
+    if (pairs.empty())
+      throw InputError(
+          fmt::format("generator C draws no pairs in {}: no two of its effects "
+                      "share a magnitude",
+                      gap::to_string(c)));
+    const auto& [r1, r2] = pairs[rng.index(pairs.size())];
+    inj.effect = r1.effect;
+    inj.effect2 = r2.effect;
+    inj.magnitude = inj.magnitude2 = rng.uniform(std::max(r1.lo, r2.lo), std::min(r1.hi, r2.hi));
+    return inj;
+  }
   const auto rs = ranges(c, g);
   if (rs.size() < 2) return inj;
   auto magnitude = [&](const Range& r) {

@@ -127,5 +127,55 @@ class RefereeResults(unittest.TestCase):
             self.assertNotIn("refused by the diagnosis", r.stderr)
 
 
+FAKE_GEN_C = """
+import json, os
+ROLLER_EFFECTS = ["none", "relaxation_length", "time_offset", "brake_threshold", "slip_offset"]
+GROUND_EFFECTS = ROLLER_EFFECTS + ["wheel_inertia", "load_transfer", "speed_friction"]
+def one_set(out, bench, eff, mag, seed):
+    # What generator C's run() would switch on: each effect its `effect == name` picks.
+    on = [n for n in GROUND_EFFECTS if eff == n]
+    os.makedirs(out, exist_ok=True)
+    json.dump(dict(bench=bench, effect=eff, on=on, misspec=(eff == "misspec"),
+                   magnitude=mag, seed=seed), open(os.path.join(out, "truth.json"), "w"))
+"""
+
+
+class GeneratorCPairs(unittest.TestCase):
+    """bench/gen_c_pair.py makes a pair by generator C's own one_set(): a name equal to both."""
+
+    def run_pair(self, tmp, *args):
+        script = os.path.join(tmp, "gen_c.py")
+        with open(script, "w") as f:
+            f.write(FAKE_GEN_C)
+        return subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "bench", "gen_c_pair.py"),
+                               script, os.path.join(tmp, "out"), *args],
+                              capture_output=True, text=True, timeout=60)
+
+    def test_both_effects_are_switched_on_at_the_one_magnitude(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            r = self.run_pair(tmp, "--bench", "ground", "--effects",
+                              "brake_threshold,wheel_inertia", "--magnitude", "1.25", "--seed",
+                              "7")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            truth = json.loads(read(os.path.join(tmp, "out", "truth.json")))
+            self.assertEqual(truth["on"], ["brake_threshold", "wheel_inertia"])
+            self.assertEqual(truth["effect"], "brake_threshold+wheel_inertia")
+            self.assertFalse(truth["misspec"])
+            self.assertEqual((truth["magnitude"], truth["seed"], truth["bench"]),
+                             (1.25, 7, "ground"))
+
+    def test_an_effect_the_bench_does_not_inject_or_one_twice_is_an_error_naming_it(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            r = self.run_pair(tmp, "--bench", "roller", "--effects",
+                              "brake_threshold,wheel_inertia", "--magnitude", "1.2", "--seed", "1")
+            self.assertNotEqual(r.returncode, 0)
+            self.assertIn("wheel_inertia", r.stderr)
+            r = self.run_pair(tmp, "--bench", "ground", "--effects", "slip_offset,slip_offset",
+                              "--magnitude", "0.01", "--seed", "1")
+            self.assertNotEqual(r.returncode, 0)
+            self.assertIn("--effects", r.stderr)
+            self.assertFalse(os.path.exists(os.path.join(tmp, "out", "truth.json")))
+
+
 if __name__ == "__main__":
     unittest.main()

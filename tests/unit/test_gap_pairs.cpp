@@ -41,6 +41,35 @@ TEST(GapPairs, DrawsTwoDifferentEffectsAndNeverLagWithDelay) {
   }
 }
 
+TEST(GapPairs, GeneratorCsPairsShareOneMagnitudeInsideBothRanges) {
+  // Generator C's script gives a set one magnitude: its pairs are two effects whose ranges
+  // overlap, both at one value inside both ranges; its roller has no two such effects.
+  Rng rng(5);
+  std::set<std::set<std::string>> seen;
+  for (int i = 0; i < 300; ++i) {
+    const auto inj = sim::draw_pair(rng, gap::Condition::Ground, sim::Generator::C);
+    ASSERT_TRUE(inj.pair());
+    EXPECT_NE(inj.effect, inj.effect2);
+    EXPECT_EQ(inj.magnitude, inj.magnitude2);
+    for (const auto& e : {inj.effect, inj.effect2}) {
+      const auto [lo, hi] = sim::effect_range(gap::Condition::Ground, sim::Generator::C, e);
+      EXPECT_GE(inj.magnitude, lo) << e;
+      EXPECT_LE(inj.magnitude, hi) << e;
+    }
+    seen.insert({inj.effect, inj.effect2});
+  }
+  // Thresholds, inertias and speed frictions share 1.0-1.5; relaxation and load transfer
+  // 0.17-0.28 (generator C's README).
+  EXPECT_EQ(seen, (std::set<std::set<std::string>>{{"brake_threshold", "wheel_inertia"},
+                                                   {"brake_threshold", "speed_friction"},
+                                                   {"speed_friction", "wheel_inertia"},
+                                                   {"load_transfer", "relaxation_length"}}));
+  EXPECT_TRUE(sim::draws_pairs(gap::Condition::Ground, sim::Generator::C));
+  EXPECT_FALSE(sim::draws_pairs(gap::Condition::Roller, sim::Generator::C));
+  EXPECT_TRUE(sim::draws_pairs(gap::Condition::Roller, sim::Generator::B));
+  EXPECT_THROW(sim::draw_pair(rng, gap::Condition::Roller, sim::Generator::C), InputError);
+}
+
 TEST(GapPairs, APairIsCorrectOnlyWhenBothAreNamed) {
   sim::TrialResult t;
   t.truth.effect = "brake_threshold";
