@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Generator C's suite through `brakefit gap`, scored against its truth.
 
-    /usr/bin/python3 bench/gap_c_suite.py [--gen-c ../shared/gapgen/gen_c.py] [--seed 77]
-        [--build build/release] [--threads 2] [--results docs/gap_results.md]
+    /usr/bin/python3 bench/gap_c_suite.py [--gen-c ../shared/gapgen/gen_c.py] [--seed 77[,5,...]]
+        [--build build/release] [--threads 2] [--results docs/gap_results.md [--results-key K]]
       (generator C imports numpy: Debian's python3-numpy, under /usr/bin/python3)
 
 Generator C (written outside the project) writes its plan of sets (94 at its default seed, 77):
@@ -16,8 +16,11 @@ misspecified). The magnitude error is the joint model's estimate (parameters_aft
 truth where the effect is named; load transfer in C's law's unit, h/L (C's vehicle weighs
 3.4 Fz0/g, so dFz/Fz per m/s^2 is 3.4 h/L / (2 g)).
 
-Prints the table, every miss and a brakefit.gap_c_suite/1 JSON; with --results, writes the table
-into that file between its `gap_c_suite` markers, the command and the commit at its head.
+Several seeds (--seed 5,11,23): each seed's plan is written and diagnosed, and the table pools
+their sets; load transfer's magnitude error is also given per tyre (C's three tyres have their
+own load laws). Prints the table, every miss and a brakefit.gap_c_suite/1 JSON; with --results,
+writes the table into that file between its `gap_c_suite` markers (`gap_c_suite KEY` with
+--results-key), the command and the commit at its head.
 """
 import argparse
 import concurrent.futures as cf
@@ -85,7 +88,7 @@ def score(truth, docs):
     rows = {"single": [0, 0], "load_transfer": [0, 0], "null": [0, 0], "misspec": [0, 0],
             "false_claims": [0, 0]}
     errors, misses, named = {}, [], []
-    per_effect = {}
+    per_effect, load_by_tyre = {}, {}
     for case, doc in zip(truth, docs):
         e, v = case["effect"], doc.get("verdict", [])
         if e == "none":
@@ -109,7 +112,10 @@ def score(truth, docs):
                 rows["load_transfer"][1] += 1
             est = estimate(case, doc) if ok else None
             if est is not None and case["magnitude"] != 0:
-                errors.setdefault(e, []).append(abs(est - case["magnitude"]) / abs(case["magnitude"]))
+                err = abs(est - case["magnitude"]) / abs(case["magnitude"])
+                errors.setdefault(e, []).append(err)
+                if e == "load_transfer":
+                    load_by_tyre.setdefault(case.get("tyre", "?"), []).append(err)
                 named.append(f"{case['case']} {case['bench']} {e} {est:.4g} for "
                              f"{case['magnitude']:.4g}")
         if e in NO_EFFECT:
@@ -117,14 +123,14 @@ def score(truth, docs):
             rows["false_claims"][0] += bool(v) and v[0] not in ("none", "unexplained", "refused")
         if not ok:
             misses.append(f"{case['case']} {case['bench']} {e} {case['magnitude']:.4g} said {v}")
-    return rows, per_effect, errors, misses, named
+    return rows, per_effect, errors, misses, named, load_by_tyre
 
 
 def pct(a, b):
     return f"{a} of {b} ({100 * a / b:.0f} %)" if b else "–"
 
 
-def table(rows, per_effect, errors):
+def table(rows, per_effect, errors, load_by_tyre):
     out = ["| sets | result |", "|---|---|"]
     out.append(f"| single effects named first (lag and delay at one roller speed as one) | "
                f"{pct(*rows['single'])} |")
@@ -137,11 +143,15 @@ def table(rows, per_effect, errors):
     med = ", ".join(f"{e} {100 * statistics.median(v):.1f} % ({len(v)})"
                     for e, v in sorted(errors.items()))
     out.append(f"| magnitude error where named, median (sets) | {med} |")
+    by_tyre = ", ".join(f"{t} {100 * statistics.median(v):.1f} % ({len(v)})"
+                        for t, v in sorted(load_by_tyre.items()))
+    out.append(f"| load transfer's error by tyre, median (sets) | {by_tyre or '–'} |")
     return "\n".join(out)
 
 
-def write_results(path, text):
-    begin, end = "<!-- gap_c_suite begin -->", "<!-- gap_c_suite end -->"
+def write_results(path, text, key=""):
+    name = f"gap_c_suite {key}" if key else "gap_c_suite"
+    begin, end = f"<!-- {name} begin -->", f"<!-- {name} end -->"
     with open(path) as f:
         doc = f.read()
     block = f"{begin}\n{text}\n{end}"
@@ -156,53 +166,68 @@ def write_results(path, text):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--gen-c", default=os.path.join(ROOT, "..", "shared", "gapgen", "gen_c.py"))
-    ap.add_argument("--seed", type=int, default=77)
+    ap.add_argument("--seed", default="77", help="the plan's seed, or several: 5,11,23")
     ap.add_argument("--build", default=os.path.join(ROOT, "build", "release"))
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--set", help="an existing suite directory (gen_c.py OUT) instead of a new one")
     ap.add_argument("--results", help="markdown file to write the table into")
+    ap.add_argument("--results-key", default="", help="its block's key (several blocks a file)")
     a = ap.parse_args()
+    try:
+        seeds = [int(x) for x in a.seed.split(",")]
+    except ValueError:
+        ap.error(f"--seed takes integers separated by commas, not {a.seed!r}")
+    if a.set and len(seeds) > 1:
+        ap.error("--set reads one suite: give one seed (or none) with it")
     brakefit = os.path.join(a.build, "cli", "brakefit")
     if not os.access(brakefit, os.X_OK):
         sys.exit(f"gap_c_suite: {brakefit} is not built (--build)")
     start = time.time()
+    truth, docs = [], []
     with tempfile.TemporaryDirectory(prefix="gap_c_suite-") as tmp:
-        set_dir = a.set or os.path.join(tmp, "set")
-        if not a.set:
-            if not os.path.exists(a.gen_c):
-                sys.exit(f"gap_c_suite: generator C's script {a.gen_c} is not there (--gen-c)")
-            log(f"writing generator C's suite (seed {a.seed}) to {set_dir}")
-            subprocess.run([sys.executable, a.gen_c, set_dir, "--seed", str(a.seed)], check=True,
-                           stdout=subprocess.DEVNULL)
-        truth_path = os.path.join(set_dir, "truth.json")
-        with open(truth_path) as f:
-            truth = json.load(f)
-        docs = [None] * len(truth)
-        with cf.ThreadPoolExecutor(a.threads) as ex:
-            futures = {ex.submit(diagnose, brakefit, set_dir, c): i for i, c in enumerate(truth)}
-            for n, fut in enumerate(cf.as_completed(futures), 1):
-                docs[futures[fut]] = fut.result()
-                if n % 10 == 0 or n == len(truth):
-                    log(f"{n}/{len(truth)} sets diagnosed")
-    rows, per_effect, errors, misses, named = score(truth, docs)
+        for seed in seeds:
+            set_dir = a.set or os.path.join(tmp, f"set{seed}")
+            if not a.set:
+                if not os.path.exists(a.gen_c):
+                    sys.exit(f"gap_c_suite: generator C's script {a.gen_c} is not there (--gen-c)")
+                log(f"writing generator C's suite (seed {seed}) to {set_dir}")
+                subprocess.run([sys.executable, a.gen_c, set_dir, "--seed", str(seed)],
+                               check=True, stdout=subprocess.DEVNULL)
+            with open(os.path.join(set_dir, "truth.json")) as f:
+                cases = json.load(f)
+            found = [None] * len(cases)
+            with cf.ThreadPoolExecutor(a.threads) as ex:
+                futures = {ex.submit(diagnose, brakefit, set_dir, c): i for i, c in enumerate(cases)}
+                for n, fut in enumerate(cf.as_completed(futures), 1):
+                    found[futures[fut]] = fut.result()
+                    if n % 10 == 0 or n == len(cases):
+                        log(f"seed {seed}: {n}/{len(cases)} sets diagnosed")
+            for c in cases:
+                c["case"] = c["case"] if len(seeds) == 1 else f"seed{seed}/{c['case']}"
+            truth += cases
+            docs += found
+    rows, per_effect, errors, misses, named, load_by_tyre = score(truth, docs)
     minutes = (time.time() - start) / 60
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
     command = " ".join(["/usr/bin/python3", "bench/gap_c_suite.py"] + sys.argv[1:])
     head = (f"<!-- written by `{command}` at commit {commit} ({datetime.date.today()}, "
-            f"{minutes:.0f} min; {len(truth)} sets of generator C, seed {a.seed}) -->")
-    text = head + "\n\n" + table(rows, per_effect, errors)
+            f"{minutes:.0f} min; {len(truth)} sets of generator C, "
+            f"seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}) -->")
+    text = head + "\n\n" + table(rows, per_effect, errors, load_by_tyre)
     print(text)
     print("\nmisses:\n" + "\n".join(misses or ["none"]))
     print("\nestimates where named:\n" + "\n".join(named))
     print(json.dumps({"schema": "brakefit.gap_c_suite/1", "version": "0.1.0", "commit": commit,
-                      "seed": a.seed, "sets": len(truth),
+                      "seeds": seeds, "sets": len(truth),
                       "counts": {k: {"ok": v[0], "of": v[1]} for k, v in rows.items()},
                       "per_effect": {k: {"named": v[0], "of": v[1]} for k, v in per_effect.items()},
                       "magnitude_error_median": {e: statistics.median(v) for e, v in errors.items()},
+                      "load_transfer_error_median_by_tyre":
+                          {t: statistics.median(v) for t, v in load_by_tyre.items()},
                       "misses": misses}))
     if a.results:
-        write_results(a.results, text)
+        write_results(a.results, text, a.results_key)
         log(f"wrote the table into {a.results}")
 
 

@@ -20,7 +20,7 @@ CASES = [
      (["relaxation_length"], {"sigma_m": 0.07})),  # a lag for a delay at one roller speed: named
     ({"bench": "roller", "effect": "slip_offset", "magnitude": 0.01},
      (["slip_offset"], {"slip_offset_ratio": -0.0102})),  # C's offset reads as the negative
-    ({"bench": "ground", "effect": "load_transfer", "magnitude": 0.25},
+    ({"bench": "ground", "effect": "load_transfer", "magnitude": 0.25, "tyre": "sedan_pac02"},
      (["load_transfer", "unexplained"], {"dfz_per_decel_s2_per_m": 0.25 * 3.4 / (2 * 9.81) * 1.1})),
     ({"bench": "ground", "effect": "speed_friction", "magnitude": 1.0},
      (["unexplained"], {})),  # a miss
@@ -38,28 +38,47 @@ print(json.dumps({{"schema": "brakefit.gap/1", "verdict": verdict, "parameters_a
 """
 
 
+# A stand-in for gen_c.py: writes CASES as its suite, whatever the seed, and records the seed.
+GEN_C = """
+import json, os, sys
+sys.path.insert(0, {here!r})
+from test_gap_c_suite import write_suite
+out, seed = sys.argv[1], int(sys.argv[sys.argv.index("--seed") + 1])
+write_suite(out)
+with open(os.path.join(out, "seed"), "w") as f:
+    f.write(str(seed))
+"""
+
+
+def write_suite(suite):
+    truth = []
+    for i, (t, _) in enumerate(CASES):
+        case = f"case{i:03d}"
+        os.makedirs(os.path.join(suite, case))
+        for r in range(3):
+            with open(os.path.join(suite, case, f"run{r}.csv"), "w") as f:
+                f.write("# bench=" + t["bench"] + "\n")
+        truth.append(dict(t, case=case))
+    with open(os.path.join(suite, "truth.json"), "w") as f:
+        json.dump(truth, f)
+
+
+def write_stand_in(build):
+    os.makedirs(os.path.join(build, "cli"))
+    with open(os.path.join(build, "cli", "answers.json"), "w") as f:
+        json.dump({f"case{i:03d}": answer for i, (_, answer) in enumerate(CASES)}, f)
+    stand_in = os.path.join(build, "cli", "brakefit")
+    with open(stand_in, "w") as f:
+        f.write(STAND_IN.format(python=sys.executable))
+    os.chmod(stand_in, os.stat(stand_in).st_mode | stat.S_IEXEC)
+
+
 class CSuite(unittest.TestCase):
     def test_scores_each_set_and_writes_its_section(self):
         with tempfile.TemporaryDirectory() as tmp:
             suite, build = os.path.join(tmp, "suite"), os.path.join(tmp, "build")
-            os.makedirs(os.path.join(build, "cli"))
-            truth, answers = [], {}
-            for i, (t, answer) in enumerate(CASES):
-                case = f"case{i:03d}"
-                os.makedirs(os.path.join(suite, case))
-                for r in range(3):
-                    with open(os.path.join(suite, case, f"run{r}.csv"), "w") as f:
-                        f.write("# bench=" + t["bench"] + "\n")
-                truth.append(dict(t, case=case))
-                answers[case] = answer
-            with open(os.path.join(suite, "truth.json"), "w") as f:
-                json.dump(truth, f)
-            with open(os.path.join(build, "cli", "answers.json"), "w") as f:
-                json.dump(answers, f)
-            stand_in = os.path.join(build, "cli", "brakefit")
-            with open(stand_in, "w") as f:
-                f.write(STAND_IN.format(python=sys.executable))
-            os.chmod(stand_in, os.stat(stand_in).st_mode | stat.S_IEXEC)
+            write_suite(suite)
+            write_stand_in(build)
             results = os.path.join(tmp, "results.md")
             with open(results, "w") as f:
                 f.write("# R\n\n<!-- gap_c_suite begin -->\nold\n<!-- gap_c_suite end -->\n\nafter\n")
@@ -77,6 +96,8 @@ class CSuite(unittest.TestCase):
             self.assertAlmostEqual(err["slip_offset"], 0.02, places=6)
             self.assertAlmostEqual(err["load_transfer"], 0.10, places=6)
             self.assertNotIn("time_offset", err)  # the lag named has no delay to measure
+            self.assertEqual(list(doc["load_transfer_error_median_by_tyre"]), ["sedan_pac02"])
+            self.assertAlmostEqual(doc["load_transfer_error_median_by_tyre"]["sedan_pac02"], 0.10)
             self.assertEqual(len(doc["misses"]), 2)
             with open(results) as f:
                 text = f.read()
@@ -84,6 +105,42 @@ class CSuite(unittest.TestCase):
             self.assertIn("3 of 4 (75 %)", text)
             self.assertIn("bench/gap_c_suite.py", text)
             self.assertTrue(text.rstrip().endswith("after"))
+            self.assertIn("| load transfer's error by tyre, median (sets) | sedan_pac02 10.0 % (1) |",
+                          text)
+
+    def test_several_seeds_pool_their_suites_into_a_block_of_its_own(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            build = os.path.join(tmp, "build")
+            write_stand_in(build)
+            gen_c = os.path.join(tmp, "gen_c.py")
+            with open(gen_c, "w") as f:
+                f.write(GEN_C.format(here=os.path.dirname(os.path.abspath(__file__))))
+            results = os.path.join(tmp, "results.md")
+            with open(results, "w") as f:
+                f.write("# R\n\n<!-- gap_c_suite begin -->\nseed 77\n<!-- gap_c_suite end -->\n")
+            p = subprocess.run([sys.executable, SCRIPT, "--gen-c", gen_c, "--seed", "5,11",
+                                "--build", build, "--results", results, "--results-key",
+                                "more seeds"], capture_output=True, text=True, timeout=120)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            doc = json.loads(p.stdout.strip().splitlines()[-1])
+            self.assertEqual(doc["seeds"], [5, 11])
+            self.assertEqual(doc["sets"], 2 * len(CASES))
+            self.assertEqual((doc["counts"]["single"]["ok"], doc["counts"]["single"]["of"]), (6, 8))
+            self.assertEqual(sorted(m.split()[0] for m in doc["misses"]),
+                             ["seed11/case003", "seed11/case005", "seed5/case003", "seed5/case005"])
+            with open(results) as f:
+                text = f.read()
+            self.assertIn("<!-- gap_c_suite begin -->\nseed 77\n<!-- gap_c_suite end -->", text)
+            self.assertIn("<!-- gap_c_suite more seeds begin -->", text)
+            self.assertIn("sets of generator C, seeds 5, 11", text)
+            self.assertIn("6 of 8 (75 %)", text)
+
+    def test_a_seed_that_is_not_a_number_is_an_error_naming_the_option(self):
+        p = subprocess.run([sys.executable, SCRIPT, "--seed", "5,x"], capture_output=True,
+                           text=True, timeout=60)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("--seed", p.stderr)
+        self.assertIn("5,x", p.stderr)
 
 
 if __name__ == "__main__":
