@@ -27,6 +27,7 @@ import concurrent.futures as cf
 import datetime
 import json
 import os
+import shlex
 import statistics
 import subprocess
 import sys
@@ -210,7 +211,7 @@ def main():
     minutes = (time.time() - start) / 60
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
-    command = " ".join(["/usr/bin/python3", "bench/gap_c_suite.py"] + sys.argv[1:])
+    command = shlex.join(["/usr/bin/python3", "bench/gap_c_suite.py"] + sys.argv[1:])
     head = (f"<!-- written by `{command}` at commit {commit} ({datetime.date.today()}, "
             f"{minutes:.0f} min; {len(truth)} sets of generator C, "
             f"seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}) -->")
