@@ -14,14 +14,16 @@ from test_cli import ROOT
 
 SCRIPT = os.path.join(ROOT, "bench", "gap_c_suite.py")
 
-# Each case: its truth, and the stand-in's answer (verdict, parameters_after).
+# Each case: its truth, and the stand-in's answer (verdict, parameters_after[, effects]).
 CASES = [
     ({"bench": "roller", "effect": "time_offset", "magnitude": 0.05},
      (["relaxation_length"], {"sigma_m": 0.07})),  # a lag for a delay at one roller speed: named
     ({"bench": "roller", "effect": "slip_offset", "magnitude": 0.01},
      (["slip_offset"], {"slip_offset_ratio": -0.0102})),  # C's offset reads as the negative
     ({"bench": "ground", "effect": "load_transfer", "magnitude": 0.25, "tyre": "sedan_pac02"},
-     (["load_transfer", "unexplained"], {"dfz_per_decel_s2_per_m": 0.25 * 3.4 / (2 * 9.81) * 1.1})),
+     (["load_transfer", "unexplained"], {"dfz_per_decel_s2_per_m": 0.5},  # the model's own q
+      [{"name": "load_transfer", "accepted": True,  # the load's change the report gives
+        "params": {"load_ratio_per_decel_s2_per_m": 0.25 * 3.4 / (2 * 9.81) * 1.1}}])),
     ({"bench": "ground", "effect": "speed_friction", "magnitude": 1.0},
      (["unexplained"], {})),  # a miss
     ({"bench": "ground", "effect": "none", "magnitude": 0.0}, (["none"], {})),
@@ -33,8 +35,9 @@ STAND_IN = """#!{python}
 import json, os, sys
 case = os.path.basename(os.path.dirname(sys.argv[-1]))
 answers = json.load(open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "answers.json")))
-verdict, after = answers[case]
-print(json.dumps({{"schema": "brakefit.gap/1", "verdict": verdict, "parameters_after": after}}))
+verdict, after, *effects = answers[case]
+print(json.dumps({{"schema": "brakefit.gap/1", "verdict": verdict, "parameters_after": after,
+                  "effects": effects[0] if effects else []}}))
 """
 
 
