@@ -1,0 +1,29 @@
+#pragma once
+// How an MF 6.1 tyre's longitudinal curve follows its wheel load: the peak's, the slip stiffness's
+// and the curvature's load laws, linearised at one load. A load transfer moves the load while a
+// run brakes; the gap diagnosis fits how much the peak moves (its scale per m/s^2 of
+// deceleration) and reads the load's own change through these laws.
+namespace brakefit::tyre {
+
+struct Mf61Tyre;  // core/tyre/mf61.hpp
+
+/// The load laws at one wheel load. The defaults are published car and van tyres' at their
+/// nominal loads (the four .tir files sim/second reads: d ln D / d ln Fz 0.87-0.97, d ln Kx /
+/// d ln D 1.15-1.33), which the diagnosis holds where the tyre's own file is not given.
+struct LoadLaws {
+  /// d ln D / d ln Fz: MF 6.1's D = (PDX1 + PDX2 dfz) Fz gives 1 + PDX2 (Fz/Fz0) / (PDX1 + PDX2
+  /// dfz).
+  double peak_exponent = 0.93;
+  /// d ln Kx / d ln D, Kx = B C D = Fz (PKX1 + PKX2 dfz) exp(PKX3 dfz).
+  double kx_over_peak = 1.25;
+  /// dE per relative change of D (dE / d ln Fz over peak_exponent), E = (PEX1 + PEX2 dfz + PEX3
+  /// dfz^2)(1 + PEX4) braking; 0 where E is at its bound 1.
+  double e_per_peak_scale = 0.0;
+};
+
+/// The tyre's load laws at wheel load fz_n (braking, the file's scalings LFZO and LEX applied).
+/// Throws InputError naming the coefficient where a law has no slope there (PDX1 + PDX2 dfz or
+/// PKX1 + PKX2 dfz not positive: the file describes no tyre at that load).
+LoadLaws load_laws_at(const Mf61Tyre& t, double fz_n);
+
+}  // namespace brakefit::tyre
