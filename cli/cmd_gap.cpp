@@ -12,6 +12,7 @@
 #include "cli/gap_report.hpp"
 #include "cli/io.hpp"
 #include "cli/recording.hpp"
+#include "cli/tyre_load_laws.hpp"
 #include "cli/tyre_report.hpp"
 #include "core/gap/bench_model.hpp"
 #include "core/gap/gap.hpp"
@@ -24,7 +25,7 @@ namespace {
 /// --wheelbase): the geometry is known exactly, a diagnosed magnitude only to its standard error.
 gap::BenchEffect declared_load_transfer(gap::Condition condition, const std::vector<gap::Run>& runs,
                                         double mass_kg, double cg_height_m, double wheelbase_m,
-                                        bool front) {
+                                        bool front, const gap::Options& laws) {
   if (condition != gap::Condition::Ground)
     throw ExitError(kExitUsage,
                     "gap: --cg-height and --wheelbase describe a ground test's vehicle; these runs "
@@ -42,7 +43,7 @@ gap::BenchEffect declared_load_transfer(gap::Condition condition, const std::vec
                     "the declared load transfer cannot be put relative to it");
   std::sort(loads.begin(), loads.end());
   return gap::declared_load_transfer(mass_kg, cg_height_m, wheelbase_m, loads[loads.size() / 2],
-                                     front);
+                                     front, laws.tyre_load_laws, laws.tyre_load_laws_source);
 }
 
 /// The declared load transfer in the bench model, in place of any the diagnosis measured.
@@ -75,6 +76,7 @@ void add_gap_command(CLI::App& app) {
     double vehicle_mass_kg = 0.0;                 ///< 0: not given
     double cg_height_m = 0.0, wheelbase_m = 0.0;  ///< 0: not given
     std::string axle = "front";
+    std::string tir;  ///< the tyre's MF 6.1 file (empty: published tyres' load laws)
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand(
@@ -123,6 +125,11 @@ void add_gap_command(CLI::App& app) {
   cmd->add_option("--axle", o->axle, "the tested wheel's axle (see --cg-height)")
       ->check(CLI::IsMember({"front", "rear"}))
       ->capture_default_str();
+  cmd->add_option("--tir", o->tir,
+                  "the tested tyre's MF 6.1 file (.tir): a load transfer is measured and given "
+                  "(dFz/Fz, h/L) at its own load laws at the runs' wheel load, not published "
+                  "tyres'")
+      ->check(CLI::ExistingFile);
   cmd->callback([o] {
     const Model model = load_model(resolve_model_path(o->model));
     o->run.pipeline.fit = false;
@@ -223,10 +230,14 @@ void add_gap_command(CLI::App& app) {
     gap::Options gap_options = gap::calibrated_options(condition);
     if (std::isfinite(o->gate_gain)) gap_options.gate_gain = o->gate_gain;
     gap_options.vehicle_mass_kg = o->vehicle_mass_kg;
+    if (!o->tir.empty()) {
+      gap_options.tyre_load_laws = tyre_load_laws_from(o->tir, runs);
+      gap_options.tyre_load_laws_source = o->tir;
+    }
     std::optional<gap::BenchEffect> declared;
     if (!transfer && (o->cg_height_m > 0 || o->wheelbase_m > 0)) {
       declared = declared_load_transfer(condition, runs, o->vehicle_mass_kg, o->cg_height_m,
-                                        o->wheelbase_m, o->axle == "front");
+                                        o->wheelbase_m, o->axle == "front", gap_options);
       gap_options.declared_load_per_decel_s2_per_m = declared->value;
       gap_options.declared_kx_load_ratio = declared->more.at(0);
     }

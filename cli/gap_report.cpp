@@ -95,6 +95,13 @@ nlohmann::ordered_json report_json(const gap::Report& r, const std::vector<gap::
                 {"bic_margin_per_point", num(gates.bic_margin_per_point)},
                 {"fit_quality_factor", num(gates.noise_factor)},
                 {"min_gap_over_floor", num(gates.min_gap_over_floor)}};
+  // The load laws a load transfer is measured at: the tyre's own file's, or published tyres'.
+  j["tyre_load_laws"] = {{"source", gates.tyre_load_laws_source.empty()
+                                        ? nlohmann::ordered_json("published")
+                                        : nlohmann::ordered_json(gates.tyre_load_laws_source)},
+                         {"peak_load_exponent", num(gates.tyre_load_laws.peak_exponent)},
+                         {"kx_load_ratio", num(gates.tyre_load_laws.kx_over_peak)},
+                         {"e_per_peak_scale", num(gates.tyre_load_laws.e_per_peak_scale)}};
   j["runs"] = nlohmann::ordered_json::array();
   for (const auto& run : runs) j["runs"].push_back(run.name);
   if (mode == "roller_vs_road") {  // "runs" are the road's, checked against the roller's fit

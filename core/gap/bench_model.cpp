@@ -18,26 +18,28 @@ void sort_effects(BenchModel& m) {
                    [](const BenchEffect& a, const BenchEffect& b) { return a.effect < b.effect; });
 }
 /// A named load transfer is held at its measured magnitude (the stiffness's load ratio at the
-/// published tyres'), not at the free fit's: the free ratio can end far from any tyre's (0.38 on
+/// tyre's load laws), not at the free fit's: the free ratio can end far from any tyre's (0.38 on
 /// a ground set whose only effect was the wheel's inertia, where undoing the free fit's q put the
 /// tyre 30 % off), while q at the published ratio is what the report gives as the magnitude.
 void hold_measured_load_transfer(const Report& rep, BenchEffect& b) {
   for (const auto& sc : rep.effects) {
     if (sc.effect != Effect::LoadTransfer || !sc.accepted) continue;
     const auto ps = effect_params(Effect::LoadTransfer);  // magnitude, ratio, pitch lag, mode
-    double q = NAN, lag_s = 0.0, mode_s2 = 0.0;
+    double q = NAN, lag_s = 0.0, mode_s2 = 0.0, ratio = kPublishedKxLoadRatio;
     for (const auto& [name, v] : sc.params) {
       if (name == ps[0].name) q = v;
+      if (name == "kx_load_ratio_held") ratio = v;
       if (name == ps[2].name) lag_s = v;
       if (name == ps[3].name) mode_s2 = v;
     }
     if (!std::isfinite(q)) return;
     b.value = q;
     b.stderr_ = NAN;  // the free fit's covariance is not this magnitude's
-    b.more = {kPublishedKxLoadRatio, lag_s, mode_s2};
-    b.origin =
-        "measured by the diagnosis, the slip stiffness's load ratio held at the published "
-        "tyres'";
+    b.more = {ratio, lag_s, mode_s2};
+    b.origin = fmt::format(
+        "measured by the diagnosis, the slip stiffness's load ratio held at the tyre's load "
+        "laws' {:.2f}",
+        ratio);
     return;
   }
 }
@@ -60,20 +62,23 @@ bool is_bench_effect(Effect e, Condition c) {
 }
 
 BenchEffect declared_load_transfer(double vehicle_mass_kg, double cg_height_m, double wheelbase_m,
-                                   double wheel_load_n, bool front_axle) {
+                                   double wheel_load_n, bool front_axle, const tyre::LoadLaws& laws,
+                                   const std::string& laws_source) {
   const double dfz_per_fz = (front_axle ? 1.0 : -1.0) * vehicle_mass_kg * cg_height_m /
                             (2.0 * wheelbase_m * wheel_load_n);
   BenchEffect b;
   b.effect = Effect::LoadTransfer;
-  b.value = dfz_per_fz * kPublishedPeakLoadExponent;
+  b.value = dfz_per_fz * laws.peak_exponent;
   b.stderr_ = NAN;
-  b.more = {kPublishedKxLoadRatio, 0.0, 0.0};
+  b.more = {laws.kx_over_peak, 0.0, 0.0};
   b.origin = fmt::format(
       "declared from the vehicle: {:.0f} kg, centre of gravity {:.3f} m high, wheelbase {:.3f} m, "
-      "{} axle, wheel load {:.0f} N: dFz/Fz {:.4g} per m/s^2, D by {:.2f} of it (published tyres' "
-      "d ln D / d ln Fz), the slip stiffness's load ratio the published {:.2f}",
+      "{} axle, wheel load {:.0f} N: dFz/Fz {:.4g} per m/s^2, D by {:.2f} of it (d ln D / d ln "
+      "Fz), the slip stiffness's load ratio {:.2f}, both {}",
       vehicle_mass_kg, cg_height_m, wheelbase_m, front_axle ? "front" : "rear", wheel_load_n,
-      dfz_per_fz, kPublishedPeakLoadExponent, kPublishedKxLoadRatio);
+      dfz_per_fz, laws.peak_exponent, laws.kx_over_peak,
+      laws_source.empty() ? std::string("published tyres'")
+                          : "the tyre's own (" + laws_source + ")");
   return b;
 }
 

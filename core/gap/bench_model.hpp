@@ -45,10 +45,13 @@ BenchModel bench_model_from(const Report& rep, Condition c);
 
 /// The vehicle's load transfer onto a wheel, declared from its geometry: the wheel's load grows
 /// (front axle) or falls (rear) by m h / (2 L) per m/s^2 of deceleration, shared by the axle's two
-/// wheels; held as the diagnosis's law (D by 1 + q a, q = dFz/Fz per m/s^2 through the published
-/// tyres' d ln D / d ln Fz; the slip stiffness by the published ratio; no pitch lag).
+/// wheels; held as the diagnosis's law (D by 1 + q a, q = dFz/Fz per m/s^2 through the tyre's
+/// d ln D / d ln Fz; the slip stiffness by its load ratio; no pitch lag). laws: the tyre's own
+/// (laws_source names its file) or, by default, published tyres'.
 BenchEffect declared_load_transfer(double vehicle_mass_kg, double cg_height_m, double wheelbase_m,
-                                   double wheel_load_n, bool front_axle);
+                                   double wheel_load_n, bool front_axle,
+                                   const tyre::LoadLaws& laws = {},
+                                   const std::string& laws_source = {});
 /// TOML text: a header comment (model hash, runs, date), schema/version, condition, and one
 /// [effects.NAME] table per effect with its parameter and PARAM_stderr.
 std::string format_bench_model(const BenchModel& m);

@@ -57,6 +57,7 @@ Report diagnose_runs(const std::vector<Run>& runs_in, const MfParams& start, con
   for (const Run& r : runs_in) {
     // Behind a lag each run reads the cap at its own runaway force.
     Run cut = cap ? up_to(r, r.force_n, 0.98 * (behind_lag ? r.runaway_force_n : cap->cap_n)) : r;
+    cut.load_laws = o.tyre_load_laws;
     if (declared_load) {
       cut.declared_load_per_decel_s2_per_m = o.declared_load_per_decel_s2_per_m;
       cut.declared_kx_load_ratio = o.declared_kx_load_ratio;

@@ -119,6 +119,11 @@ struct Options {
   /// baseline's too, and not a candidate. Unheld, its change of the curve with the deceleration
   /// is shared out among the instrument's effects (a wheel's inertia, a threshold) it resembles.
   double declared_load_per_decel_s2_per_m = 0.0, declared_kx_load_ratio = 1.0;
+  /// The tyre's own load laws at the runs' wheel load, where its MF 6.1 file is known
+  /// (tyre::load_laws_at; the source names the file), else published tyres' (empty source): a
+  /// named load transfer's magnitude is measured and read at them (load_transfer_report.cpp).
+  tyre::LoadLaws tyre_load_laws;
+  std::string tyre_load_laws_source;
   std::size_t max_effects = 3;  ///< forward selection depth
   /// When a gap above noise_factor x noise is left, the first accepted effect must have had at
   /// least this held-out gain, else none is named (fit-quality check: a curve that is not a Magic

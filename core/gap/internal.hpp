@@ -30,11 +30,11 @@ inline constexpr double kTyreShiftBicMargin = 10.0;
 /// PKX3) / (1 + PDX2/PDX1): the four files sim/second reads give 1.15-1.33 (TNO 205/60R15 1.33,
 /// a van's 1.17). The slip stiffness's load sensitivity over the peak's, at which load
 /// transfer's magnitude is measured (Effect::LoadTransferMeasured).
-inline constexpr double kPublishedKxLoadRatio = 1.25;
+inline constexpr double kPublishedKxLoadRatio = tyre::LoadLaws{}.kx_over_peak;
 /// How the peak follows the load, d ln D / d ln Fz, of published MF 6.1 tyres: 0.87-0.97 for the
 /// four .tir files of sim/second at 0.8-1.15 x their nominal loads. Load transfer's D scale per
 /// m/s^2 over it is the load's relative change per m/s^2, dFz/Fz.
-inline constexpr double kPublishedPeakLoadExponent = 0.93;
+inline constexpr double kPublishedPeakLoadExponent = tyre::LoadLaws{}.peak_exponent;
 /// The nuisance terms (a slip bias common to the runs), not effects: never named.
 inline bool is_nuisance(Effect e) {
   return e == Effect::ReferenceBias || e == Effect::TyreShift;

@@ -1,4 +1,4 @@
-// Load transfer as the report gives it: its magnitude at the published stiffness ratio, as
+// Load transfer as the report gives it: its magnitude at the tyre's load laws, as
 // dFz/Fz and as h/L, and the body's pitch it follows.
 #include <fmt/format.h>
 
@@ -41,10 +41,11 @@ void pitch_note(Report& rep, EffectScore& e) {
 
 }  // namespace
 
-/// Load transfer, once named, is measured with the stiffness ratio held at the published tyres'
-/// (Effect::LoadTransferMeasured): its score's magnitude is that fit's q; the free fit's q stays
-/// beside it (dfz_per_decel_free_ratio_s2_per_m). Its free ratio has decided the naming (inside
-/// its range) and its fit stays the model's: a note says both.
+/// Load transfer, once named, is measured with the stiffness ratio held at the tyre's load laws
+/// (Options::tyre_load_laws: its own file's or published tyres'; Effect::LoadTransferMeasured): its
+/// score's magnitude is that fit's q; the free fit's q stays beside it
+/// (dfz_per_decel_free_ratio_s2_per_m). Its free ratio has decided the naming (inside its range)
+/// and its fit stays the model's: a note says both.
 void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
                            const Options& o) {
   std::vector<Effect> model = rep.accepted;
@@ -62,8 +63,12 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
     const double q_free = e.params[0].second, ratio = e.params[1].second;
     e.params[0].second = q;
     e.params.emplace_back("dfz_per_decel_free_ratio_s2_per_m", q_free);
-    const double load_per_decel = q / kPublishedPeakLoadExponent;
+    const tyre::LoadLaws& laws = o.tyre_load_laws;
+    const bool own = !o.tyre_load_laws_source.empty();
+    const double load_per_decel = q / laws.peak_exponent;
     e.params.emplace_back("load_ratio_per_decel_s2_per_m", load_per_decel);
+    e.params.emplace_back("kx_load_ratio_held", laws.kx_over_peak);
+    e.params.emplace_back("peak_load_exponent", laws.peak_exponent);
     std::string h_over_l;
     if (o.vehicle_mass_kg > 0 && fz_n > 0) {
       const double v = 2.0 * fz_n * load_per_decel / o.vehicle_mass_kg;
@@ -73,14 +78,21 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
           "height over the wheelbase is {:.3f} (h/L = 2 Fz (dFz/Fz per m/s^2) / m)",
           o.vehicle_mass_kg, fz_n, v);
     }
+    const std::string whose =
+        own ? fmt::format("the tyre's own file, {}, at the runs' wheel load",
+                          o.tyre_load_laws_source)
+            : std::string(
+                  "published MF 6.1 tyres (their ratios 1.15-1.33, d ln D / d ln Fz "
+                  "0.87-0.97; the tyre's own file, where given, reads them at its own)");
     rep.notes.push_back(fmt::format(
         "load_transfer's magnitude, {:.4g} per m/s^2, is measured with the slip stiffness's load "
-        "ratio held at published MF 6.1 tyres' ({:.2f}; 1.15-1.33): the runs end just past the "
-        "peak and fix the stiffness's load sensitivity (q x ratio) better than q; the free fit "
-        "says {:.4g} at a ratio of {:.2f}. The wheel's load changes by {:.4g} of itself per m/s^2 "
-        "(dFz/Fz: the peak's change over published tyres' d ln D / d ln Fz, {:.2f}; 0.87-0.97){}",
-        q, kPublishedKxLoadRatio, q_free, ratio, load_per_decel, kPublishedPeakLoadExponent,
-        h_over_l));
+        "ratio held at {:.2f} and E moving by {:.3f} per unit of the peak's change, the load laws "
+        "of {}: the runs end just past the peak and fix the stiffness's load sensitivity (q x "
+        "ratio) better than q; the free fit says {:.4g} at a ratio of {:.2f}. The wheel's load "
+        "changes by {:.4g} of itself per m/s^2 (dFz/Fz: the peak's change over d ln D / d ln Fz, "
+        "{:.3f}){}",
+        q, laws.kx_over_peak, laws.e_per_peak_scale, whose, q_free, ratio, load_per_decel,
+        laws.peak_exponent, h_over_l));
     pitch_note(rep, e);
   }
 }

@@ -225,11 +225,13 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
       case Effect::LoadTransfer:
       case Effect::LoadTransferShape:
       case Effect::LoadTransferMeasured:  // Fz grows with the measured deceleration
-        follow_load(pitch_lagged_decel(r, p[first + effect_params(effect).size() - 2],
-                                       p[first + effect_params(effect).size() - 1]),
-                    q,
-                    effect == Effect::LoadTransferMeasured ? kPublishedKxLoadRatio : p[first + 1],
-                    effect == Effect::LoadTransferShape ? p[first + 2] : 0.0);
+        follow_load(
+            pitch_lagged_decel(r, p[first + effect_params(effect).size() - 2],
+                               p[first + effect_params(effect).size() - 1]),
+            q, effect == Effect::LoadTransferMeasured ? r.load_laws.kx_over_peak : p[first + 1],
+            effect == Effect::LoadTransferShape      ? p[first + 2]
+            : effect == Effect::LoadTransferMeasured ? r.load_laws.e_per_peak_scale
+                                                     : 0.0);
         break;
       case Effect::SpeedFriction:  // applied below, at the slip the curve is read at
         lambda_mu_v = q;

@@ -210,6 +210,54 @@ class Gap(unittest.TestCase):
         self.assertEqual(r.returncode, 64)
         self.assertIn("--vehicle-mass", r.stderr)
 
+    def test_a_load_transfer_is_read_at_the_tyres_own_file(self):
+        # The shipped ground runs (a 3 800 N wheel) name a load transfer. Given the tyre's MF 6.1
+        # file, its magnitude is measured at that file's load laws at the runs' wheel load,
+        # worked out here from the file's coefficients; without it, at published tyres'.
+        runs = [os.path.join(REC, f"ground_2p2bar_{r}barps.log") for r in (100, 150, 250)]
+        c = dict(PDX1=1.2, PDX2=-0.2, PKX1=22.0, PKX2=6.0, PKX3=0.1, PEX1=0.2, PEX2=0.3,
+                 PEX3=0.05, PEX4=0.02)
+        with tempfile.TemporaryDirectory() as tmp:
+            tir = write(tmp, "tyre.tir", "[MDI_HEADER]\nFILE_TYPE = 'tir'\n[VERTICAL]\n"
+                        "FNOMIN = 4200 $ N\n[LONGITUDINAL_COEFFICIENTS]\nPCX1 = 1.6\n"
+                        + "".join(f"{k} = {v}\n" for k, v in c.items()))
+            docs = {}
+            for given in (False, True):
+                r = run("gap", "--json", *(("--tir", tir) if given else ()), *runs)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                docs[given] = json.loads(r.stdout)
+            x = 3800 / 4200
+            dfz = x - 1
+            peak = 1 + c["PDX2"] * x / (c["PDX1"] + c["PDX2"] * dfz)
+            kx = 1 + c["PKX2"] * x / (c["PKX1"] + c["PKX2"] * dfz) + c["PKX3"] * x
+            e = (c["PEX2"] + 2 * c["PEX3"] * dfz) * x * (1 + c["PEX4"]) / peak
+            laws = docs[True]["tyre_load_laws"]
+            self.assertEqual(laws["source"], tir)
+            self.assertAlmostEqual(laws["peak_load_exponent"], peak, places=9)
+            self.assertAlmostEqual(laws["kx_load_ratio"], kx / peak, places=9)
+            self.assertAlmostEqual(laws["e_per_peak_scale"], e, places=9)
+            self.assertEqual(docs[False]["tyre_load_laws"]["source"], "published")
+            self.assertEqual(docs[False]["tyre_load_laws"]["kx_load_ratio"], 1.25)
+            read = {}
+            for given, doc in docs.items():
+                self.assertIn("load_transfer", doc["verdict"])
+                lt = next(x for x in doc["effects"] if x["accepted"] and x["name"] == "load_transfer")
+                held = lt["params"]["kx_load_ratio_held"]
+                self.assertEqual(held, doc["tyre_load_laws"]["kx_load_ratio"])
+                read[given] = lt["params"]["load_ratio_per_decel_s2_per_m"]
+                self.assertAlmostEqual(read[given], lt["params"]["dfz_per_decel_s2_per_m"]
+                                       / doc["tyre_load_laws"]["peak_load_exponent"], places=12)
+            self.assertNotAlmostEqual(read[True], read[False], places=3)
+            # A file that describes no tyre is refused, naming the file and what is missing.
+            bad = write(tmp, "bad.tir", "[LONGITUDINAL_COEFFICIENTS]\nPCX1 = 1.6\n")
+            r = run("gap", "--tir", bad, *runs)
+            self.assertEqual(r.returncode, 65, r.stderr)
+            self.assertIn(f"{bad}: [VERTICAL] FNOMIN missing", r.stderr)
+            bad = write(tmp, "worse.tir", "[VERTICAL]\nFNOMIN 4000\n")
+            r = run("gap", "--tir", bad, *runs)
+            self.assertEqual(r.returncode, 65, r.stderr)
+            self.assertIn(f"{bad}:2", r.stderr)
+
     def test_runs_of_two_benches_are_refused_in_mode_1(self):
         r = run("gap", os.path.join(REC, "roller_2p2bar_fast.log"),
                 os.path.join(REC, "ground_2p2bar_150barps.log"))

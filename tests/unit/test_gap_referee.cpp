@@ -78,6 +78,58 @@ TEST(GapReferee, LoadTransferIsGivenAsHOverLWhereTheMassIsKnown) {
     for (const auto& [name, v] : e.params) EXPECT_NE(name, "cg_height_over_wheelbase");
 }
 
+TEST(GapReferee, LoadTransferIsReadAtTheTyresOwnLoadLawsWhereGiven) {
+  // The same set (trial 43's) with a tyre's own load laws given: the naming is the same, the
+  // magnitude is measured again with the slip stiffness's load ratio and E's change held at the
+  // tyre's, and the load's change is the peak's over the tyre's d ln D / d ln Fz.
+  const sim::Injection inj{"load_transfer", 0.02269, gap::Condition::Ground};
+  const sim::Scenario s = sim::inject(sim::referee_null(can::BenchKind::Ground), inj);
+  const auto runs = sim::simulate_runs(s, 101043);
+  struct Read {
+    std::vector<std::string> verdict;
+    double q = NAN, load = NAN, ratio = NAN, exponent = NAN;
+    std::string note;
+  };
+  auto diagnose = [&](const tyre::LoadLaws& laws, const std::string& source) {
+    gap::Options o = gap::calibrated_options(gap::Condition::Ground);
+    o.tyre_load_laws = laws;
+    o.tyre_load_laws_source = source;
+    const gap::Report rep = gap::diagnose(runs, sim::pooled_start(runs), o);
+    Read r;
+    r.verdict = rep.verdict;
+    for (const auto& e : rep.effects)
+      if (e.accepted && e.effect == gap::Effect::LoadTransfer)
+        for (const auto& [name, v] : e.params) {
+          if (name == "dfz_per_decel_s2_per_m") r.q = v;
+          if (name == "load_ratio_per_decel_s2_per_m") r.load = v;
+          if (name == "kx_load_ratio_held") r.ratio = v;
+          if (name == "peak_load_exponent") r.exponent = v;
+        }
+    for (const auto& n : rep.notes)
+      if (n.find("load_transfer's magnitude") != std::string::npos) r.note = n;
+    return r;
+  };
+  const Read published = diagnose({}, "");
+  tyre::LoadLaws own;
+  own.peak_exponent = 0.85;
+  own.kx_over_peak = 1.45;
+  own.e_per_peak_scale = 0.25;
+  const Read given = diagnose(own, "tyre.tir");
+  EXPECT_EQ(given.verdict, published.verdict);
+  ASSERT_FALSE(given.verdict.empty());
+  EXPECT_EQ(given.verdict.front(), "load_transfer");
+  EXPECT_DOUBLE_EQ(published.ratio, 1.25);
+  EXPECT_DOUBLE_EQ(published.exponent, 0.93);
+  EXPECT_DOUBLE_EQ(given.ratio, 1.45);
+  EXPECT_DOUBLE_EQ(given.exponent, 0.85);
+  EXPECT_NEAR(published.load, published.q / 0.93, 1e-12);
+  EXPECT_NEAR(given.load, given.q / 0.85, 1e-12);
+  // A steeper stiffness law takes a smaller peak change to make the same curves.
+  EXPECT_LT(given.q, 0.97 * published.q);
+  EXPECT_NE(given.note.find("the tyre's own file, tyre.tir"), std::string::npos) << given.note;
+  EXPECT_NE(published.note.find("published MF 6.1 tyres"), std::string::npos) << published.note;
+}
+
 TEST(GapReferee, RollerVsRoadNamesTheTransferEffect) {
   // Bench vs bench: the roller's friction differs from the road's (mu_ratio = road / roller);
   // load transfer on the road (dFz/Fz 0.03 per m/s^2 through D). Each is named first, with its
