@@ -2,7 +2,8 @@
 """Generator C's suite through `brakefit gap`, scored against its truth.
 
     /usr/bin/python3 bench/gap_c_suite.py [--gen-c ../shared/gapgen/gen_c.py] [--seed 77[,5,...]]
-        [--build build/release] [--threads 2] [--results docs/gap_results.md [--results-key K]]
+        [--build build/release] [--threads 2] [--tir] [--results docs/gap_results.md
+        [--results-key K]]
       (generator C imports numpy: Debian's python3-numpy, under /usr/bin/python3)
 
 Generator C (written outside the project) writes its plan of sets (94 at its default seed, 77):
@@ -17,6 +18,11 @@ truth where the effect is named; load transfer's is the wheel load's change the 
 (dFz/Fz per m/s^2, the accepted effect's load_ratio_per_decel_s2_per_m) in C's law's unit, h/L
 (C's vehicle weighs 3.4 Fz0/g, so dFz/Fz per m/s^2 is 3.4 h/L / (2 g)).
 
+With --tir each set is diagnosed as a researcher who knows the tyre would: `brakefit gap --tir`
+with the set's tyre's MF 6.1 file, written from generator C's own coefficients (its TYRES table,
+read from its script without running it) as FNOMIN and the longitudinal coefficients; a load
+transfer is then read at that tyre's load laws instead of published tyres'.
+
 Several seeds (--seed 5,11,23): each seed's plan is written and diagnosed, and the table pools
 their sets; load transfer's magnitude error is also given per tyre (C's three tyres have their
 own load laws). Prints the table, every miss and a brakefit.gap_c_suite/1 JSON; with --results,
@@ -24,6 +30,7 @@ writes the table into that file between its `gap_c_suite` markers (`gap_c_suite 
 --results-key), the command and the commit at its head.
 """
 import argparse
+import ast
 import concurrent.futures as cf
 import datetime
 import json
@@ -54,10 +61,33 @@ def log(msg):
     print(f"[gap_c_suite] {msg}", file=sys.stderr, flush=True)
 
 
-def diagnose(brakefit, set_dir, case):
+def c_tyres(gen_c):
+    """Generator C's TYRES table, evaluated alone from its script (the script is not run)."""
+    with open(gen_c) as f:
+        tree = ast.parse(f.read(), gen_c)
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "TYRES" for t in node.targets):
+            space = {}
+            exec(compile(ast.Module([node], []), gen_c, "exec"), {"__builtins__": {"dict": dict}}, space)
+            return space["TYRES"]
+    sys.exit(f"gap_c_suite: {gen_c} has no TYRES table (--tir reads the tyres' coefficients there)")
+
+
+def write_tir(path, name, coefficients):
+    """An MF 6.1 property file with the tyre's reference load and longitudinal coefficients."""
+    lines = ["[MDI_HEADER]", "FILE_TYPE = 'tir'", "FILE_VERSION = 3.0",
+             f"$ generator C's tyre {name}, written by bench/gap_c_suite.py --tir",
+             "[VERTICAL]", f"FNOMIN = {coefficients['FZ0']!r}", "[LONGITUDINAL_COEFFICIENTS]"]
+    lines += [f"{k} = {v!r}" for k, v in coefficients.items() if k != "FZ0"]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def diagnose(brakefit, set_dir, case, tir_dir=None):
     d = os.path.join(set_dir, case["case"])
     runs = sorted(os.path.join(d, f) for f in os.listdir(d) if f.endswith(".csv"))
-    p = subprocess.run([brakefit, "gap", "--json", *runs], capture_output=True, text=True)
+    tir = ["--tir", os.path.join(tir_dir, case["tyre"] + ".tir")] if tir_dir and case.get("tyre") else []
+    p = subprocess.run([brakefit, "gap", "--json", *tir, *runs], capture_output=True, text=True)
     try:
         return json.loads(p.stdout)
     except json.JSONDecodeError:
@@ -182,6 +212,8 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build", "release"))
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--set", help="an existing suite directory (gen_c.py OUT) instead of a new one")
+    ap.add_argument("--tir", action="store_true",
+                    help="give each set its tyre's MF 6.1 file (from generator C's TYRES)")
     ap.add_argument("--results", help="markdown file to write the table into")
     ap.add_argument("--results-key", default="", help="its block's key (several blocks a file)")
     a = ap.parse_args()
@@ -197,6 +229,12 @@ def main():
     start = time.time()
     truth, docs = [], []
     with tempfile.TemporaryDirectory(prefix="gap_c_suite-") as tmp:
+        tir_dir = None
+        if a.tir:
+            tir_dir = os.path.join(tmp, "tyres")
+            os.makedirs(tir_dir)
+            for name, coefficients in c_tyres(a.gen_c).items():
+                write_tir(os.path.join(tir_dir, name + ".tir"), name, coefficients)
         for seed in seeds:
             set_dir = a.set or os.path.join(tmp, f"set{seed}")
             if not a.set:
@@ -209,7 +247,7 @@ def main():
                 cases = json.load(f)
             found = [None] * len(cases)
             with cf.ThreadPoolExecutor(a.threads) as ex:
-                futures = {ex.submit(diagnose, brakefit, set_dir, c): i for i, c in enumerate(cases)}
+                futures = {ex.submit(diagnose, brakefit, set_dir, c, tir_dir): i for i, c in enumerate(cases)}
                 for n, fut in enumerate(cf.as_completed(futures), 1):
                     found[futures[fut]] = fut.result()
                     if n % 10 == 0 or n == len(cases):

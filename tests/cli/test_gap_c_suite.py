@@ -34,7 +34,11 @@ CASES = [
 STAND_IN = """#!{python}
 import json, os, sys
 case = os.path.basename(os.path.dirname(sys.argv[-1]))
-answers = json.load(open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "answers.json")))
+here = os.path.dirname(os.path.abspath(__file__))
+answers = json.load(open(os.path.join(here, "answers.json")))
+tir = open(sys.argv[sys.argv.index("--tir") + 1]).read() if "--tir" in sys.argv else None
+with open(os.path.join(here, "calls.jsonl"), "a") as f:
+    f.write(json.dumps({{"case": case, "tir": tir}}) + "\\n")
 verdict, after, *effects = answers[case]
 print(json.dumps({{"schema": "brakefit.gap/1", "verdict": verdict, "parameters_after": after,
                   "effects": effects[0] if effects else []}}))
@@ -44,6 +48,9 @@ print(json.dumps({{"schema": "brakefit.gap/1", "verdict": verdict, "parameters_a
 # A stand-in for gen_c.py: writes CASES as its suite, whatever the seed, and records the seed.
 GEN_C = """
 import json, os, sys
+TYRES = {{  # C's table: a tyre's reference load and longitudinal coefficients
+ "sedan_pac02": dict(FZ0=3928.5, PCX1=1.6411, PDX1=1.1739, PKX1=22.303, PKX2=0.48896),
+}}
 sys.path.insert(0, {here!r})
 from test_gap_c_suite import write_suite
 out, seed = sys.argv[1], int(sys.argv[sys.argv.index("--seed") + 1])
@@ -137,6 +144,35 @@ class CSuite(unittest.TestCase):
             self.assertIn("<!-- gap_c_suite more seeds begin -->", text)
             self.assertIn("sets of generator C, seeds 5, 11", text)
             self.assertIn("6 of 8 (75 %)", text)
+
+    def test_with_tir_each_set_gets_its_tyres_file_from_generator_cs_table(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            build = os.path.join(tmp, "build")
+            write_stand_in(build)
+            gen_c = os.path.join(tmp, "gen_c.py")
+            with open(gen_c, "w") as f:
+                f.write(GEN_C.format(here=os.path.dirname(os.path.abspath(__file__))))
+            p = subprocess.run([sys.executable, SCRIPT, "--gen-c", gen_c, "--seed", "3", "--tir",
+                                "--build", build], capture_output=True, text=True, timeout=120)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            with open(os.path.join(build, "cli", "calls.jsonl")) as f:
+                calls = {c["case"]: c["tir"] for c in map(json.loads, f)}
+            self.assertEqual(len(calls), len(CASES))
+            tyred = [f"case{i:03d}" for i, (t, _) in enumerate(CASES) if "tyre" in t]
+            self.assertEqual(sorted(c for c, tir in calls.items() if tir), tyred)
+            tir = calls[tyred[0]]
+            self.assertIn("[VERTICAL]\nFNOMIN = 3928.5\n", tir)
+            self.assertIn("[LONGITUDINAL_COEFFICIENTS]\n", tir)
+            for line in ("PCX1 = 1.6411", "PDX1 = 1.1739", "PKX1 = 22.303", "PKX2 = 0.48896"):
+                self.assertIn(line + "\n", tir)
+            self.assertNotIn("FZ0", tir)
+            # A script without the table is refused, naming it.
+            with open(gen_c, "w") as f:
+                f.write("print('no tyres here')\n")
+            p = subprocess.run([sys.executable, SCRIPT, "--gen-c", gen_c, "--tir", "--build",
+                                build], capture_output=True, text=True, timeout=120)
+            self.assertNotEqual(p.returncode, 0)
+            self.assertIn(f"{gen_c} has no TYRES table", p.stderr)
 
     def test_a_seed_that_is_not_a_number_is_an_error_naming_the_option(self):
         p = subprocess.run([sys.executable, SCRIPT, "--seed", "5,x"], capture_output=True,
