@@ -20,7 +20,7 @@ truth where the effect is named; load transfer's is the wheel load's change the 
 
 With --tir each set is diagnosed as a researcher who knows the tyre would: `brakefit gap --tir`
 with the set's tyre's MF 6.1 file, written from generator C's own coefficients (its TYRES table,
-read from its script without running it) as FNOMIN and the longitudinal coefficients; a load
+read from its script without running it: bench/gen_c_tyres.py); a load
 transfer is then read at that tyre's load laws instead of published tyres'.
 
 Several seeds (--seed 5,11,23): each seed's plan is written and diagnosed, and the table pools
@@ -30,7 +30,6 @@ writes the table into that file between its `gap_c_suite` markers (`gap_c_suite 
 --results-key), the command and the commit at its head.
 """
 import argparse
-import ast
 import concurrent.futures as cf
 import datetime
 import json
@@ -41,6 +40,8 @@ import subprocess
 import sys
 import tempfile
 import time
+
+from gen_c_tyres import write_all as write_c_tyres
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 G_MPS2 = 9.81
@@ -59,28 +60,6 @@ NO_EFFECT = ("none", "misspec")
 
 def log(msg):
     print(f"[gap_c_suite] {msg}", file=sys.stderr, flush=True)
-
-
-def c_tyres(gen_c):
-    """Generator C's TYRES table, evaluated alone from its script (the script is not run)."""
-    with open(gen_c) as f:
-        tree = ast.parse(f.read(), gen_c)
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "TYRES" for t in node.targets):
-            space = {}
-            exec(compile(ast.Module([node], []), gen_c, "exec"), {"__builtins__": {"dict": dict}}, space)
-            return space["TYRES"]
-    sys.exit(f"gap_c_suite: {gen_c} has no TYRES table (--tir reads the tyres' coefficients there)")
-
-
-def write_tir(path, name, coefficients):
-    """An MF 6.1 property file with the tyre's reference load and longitudinal coefficients."""
-    lines = ["[MDI_HEADER]", "FILE_TYPE = 'tir'", "FILE_VERSION = 3.0",
-             f"$ generator C's tyre {name}, written by bench/gap_c_suite.py --tir",
-             "[VERTICAL]", f"FNOMIN = {coefficients['FZ0']!r}", "[LONGITUDINAL_COEFFICIENTS]"]
-    lines += [f"{k} = {v!r}" for k, v in coefficients.items() if k != "FZ0"]
-    with open(path, "w") as f:
-        f.write("\n".join(lines) + "\n")
 
 
 def diagnose(brakefit, set_dir, case, tir_dir=None):
@@ -232,9 +211,7 @@ def main():
         tir_dir = None
         if a.tir:
             tir_dir = os.path.join(tmp, "tyres")
-            os.makedirs(tir_dir)
-            for name, coefficients in c_tyres(a.gen_c).items():
-                write_tir(os.path.join(tir_dir, name + ".tir"), name, coefficients)
+            write_c_tyres(a.gen_c, tir_dir)
         for seed in seeds:
             set_dir = a.set or os.path.join(tmp, f"set{seed}")
             if not a.set:

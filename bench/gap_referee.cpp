@@ -3,7 +3,7 @@
 //               [--null-share 0.3] [--calibrate 30] [--misspecified 30] [--seed 1] [--threads N]
 //               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1|0|only]
 //               [--only EFFECT,...] [--pick I,...] [--why 1|2] [--pairs N] [--detection SETS]
-//               [--results FILE [--results-key K]] [--export-hz HZ] [--outside N]
+//               [--results FILE [--results-key K]] [--export-hz HZ] [--outside N] [--tyre-file]
 // Three generators make the runs: A, the project's simulator (candump logs), B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export), and C, a physics written outside the project (--gen-c, by default
@@ -57,7 +57,8 @@ int run(int argc, char** argv) {
   std::string trials_from;           // --trials-from: only these generators' trials (empty: all)
   std::string results, results_key;  // --results FILE [--results-key KEY]
   std::string stations = "cars";     // --stations: generator B's draws
-  std::string export_hz_text;        // --export-hz: generator B's export rate (empty: as drawn)
+  bool tyre_file = false;  // --tyre-file 1: each diagnosis given its tyre's load laws (gap --tir)
+  std::string export_hz_text;  // --export-hz: generator B's export rate (empty: as drawn)
   bool crossed = true, crossed_only = false;  // --crossed 1|0|only
   st.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int i = 1; i < argc; i += 2) {
@@ -77,6 +78,8 @@ int run(int argc, char** argv) {
              "                         every export: 50-1000 Hz, 2-6 runs, heavy vehicles)\n"
              "  [--export-hz HZ]      (generator B's sets, gates' and trials', exported at HZ\n"
              "                         instead of their drawn rate: what the rate alone costs)\n"
+             "  [--tyre-file 1]       (each diagnosis given its tyre's own load laws, as\n"
+             "                         `brakefit gap --tir` its file; default published tyres')\n"
              "  [--only EFFECT,...]   (the trials that draw these effects, e.g. none)\n"
              "  [--pick I,...]        (only these trials and pair trials, by the index a miss "
              "names)\n"
@@ -128,7 +131,14 @@ int run(int argc, char** argv) {
       stations = v;
     else if (k == "--export-hz")
       export_hz_text = v;
-    else if (k == "--only") {
+    else if (k == "--tyre-file") {
+      const std::string w = v;
+      if (w != "1" && w != "0") {
+        std::cerr << "gap_referee: --tyre-file takes 1 or 0, not '" << w << "'\n";
+        return 64;
+      }
+      tyre_file = w == "1";
+    } else if (k == "--only") {
       std::stringstream list(v);
       for (std::string e; std::getline(list, e, ',');) st.only.push_back(e);
     } else if (k == "--pick") {
@@ -166,6 +176,7 @@ int run(int argc, char** argv) {
     }
   }
   sim::set_generator_b_export_hz(export_hz);
+  sim::set_tyre_file_known(tyre_file);
   if (!results.empty() && !std::ofstream(results, std::ios::app)) {  // before hours of trials
     std::cerr << "gap_referee: cannot write the results file " << results << "\n";
     return 73;
@@ -189,6 +200,7 @@ int run(int argc, char** argv) {
   j["seed"] = st.seed;
   j["stations"] = stations;
   if (export_hz > 0) j["export_hz"] = export_hz;
+  j["tyre_file"] = tyre_file;
   bool any = false;
   for (auto c : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad}) {
     if (which != "all" && which != gap::to_string(c)) continue;

@@ -6,13 +6,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <utility>
 
 #include "core/curve.hpp"
 #include "core/pipeline/event_csv.hpp"
+#include "core/tyre/load_laws.hpp"
+#include "core/tyre/tir_numbers.hpp"
+#include "sim/second/tir.hpp"
 
 namespace brakefit::bench {
 
@@ -26,27 +28,34 @@ std::string slurp(const std::filesystem::path& p) {
   return s.str();
 }
 
-/// d ln D / d ln Fz at load fz of the outside generator's tyres (their PDX1, PDX2, FZ0, as its
-/// README publishes them): load transfer's h/L becomes the peak's change per m/s^2 through it.
-double d_ln_d_per_ln_fz(const std::string& tyre, double fz_n) {
-  struct Pdx {
-    double fz0, pdx1, pdx2;
-  };
-  static const std::map<std::string, Pdx> tyres = {{"vw_185_80R14", {3800.0, 1.09, -0.079328}},
-                                                   {"sedan_pac02", {3928.5, 1.1739, -0.16395}},
-                                                   {"mf61_255_55", {6752.0, 1.1632, -0.11154}}};
-  const auto it = tyres.find(tyre);
-  if (it == tyres.end()) throw GeneratorError(fmt::format("generator C: unknown tyre '{}'", tyre));
-  const Pdx& t = it->second;
-  const double dfz = (fz_n - t.fz0) / t.fz0;
-  return 1.0 + t.pdx2 * (fz_n / t.fz0) / (t.pdx1 + t.pdx2 * dfz);
-}
-
 /// The interpreter the script runs under (Debian's, where python3-numpy installs numpy).
 constexpr const char* kPython = "/usr/bin/python3";
 
 /// Two of the script's effects in one of its sets (a pair), by the script's own code.
 constexpr const char* kPairScript = BRAKEFIT_SOURCE_DIR "/bench/gen_c_pair.py";
+
+/// The script's tyres as MF 6.1 files (its own coefficients, read from its TYRES table).
+constexpr const char* kTyreScript = BRAKEFIT_SOURCE_DIR "/bench/gen_c_tyres.py";
+
+/// The load laws of the script's tyre `name` at fz_n, from its file written into dir.
+tyre::LoadLaws c_tyre_laws(const std::string& script, const std::filesystem::path& dir,
+                           const std::string& name, double fz_n) {
+  const std::filesystem::path tyres = dir / "tyres";
+  const std::string cmd = fmt::format("{} '{}' '{}' '{}' >/dev/null 2>'{}'", kPython, kTyreScript,
+                                      script, tyres.string(), (dir / "stderr").string());
+  if (std::system(cmd.c_str()) != 0)
+    throw GeneratorError(fmt::format("generator C's tyres: {}: {}", cmd, slurp(dir / "stderr")));
+  const std::filesystem::path file = tyres / (name + ".tir");
+  if (!std::filesystem::exists(file))
+    throw GeneratorError(fmt::format("generator C: unknown tyre '{}'", name));
+  const std::string source = file.string();
+  try {
+    return tyre::load_laws_at(
+        tyre::tyre_from_tir(sim2::parse_tir(slurp(file), source).numbers, source), fz_n);
+  } catch (const InputError& e) {
+    throw GeneratorError(fmt::format("generator C's tyre {}: {}", name, e.what()));
+  }
+}
 
 /// The script's vehicle: mass 3.4 Fz0 / g, this wheel's load Fz0 + m (h/L) a / 2.
 constexpr double kLoadPerDecelPerHoverL = 1.7 / 9.81;
@@ -99,13 +108,14 @@ std::vector<gap::Run> outside_runs(const std::string& script, sim::Injection& in
     wheel_load_n = pipeline::parse_event_csv(text, name).calibration.wheel_load_n;
     sim::append_event_csv_runs(out, text, name);
   }
-  // Each effect's truth in the diagnosis parameter's unit.
+  // Each effect's truth in the diagnosis parameter's unit: load transfer's through the tyre's
+  // own d ln D / d ln Fz.
+  inj.tyre_laws = c_tyre_laws(script, dir, truth.at("tyre").get<std::string>(), wheel_load_n);
   for (auto [e, m] : {std::pair{&inj.effect, &inj.magnitude}, {&inj.effect2, &inj.magnitude2}}) {
     if (*e == "slip_offset") *m = -*m;
     if (*e == "load_transfer") {
       inj.load_per_decel = *m * kLoadPerDecelPerHoverL;
-      *m *= kLoadPerDecelPerHoverL *
-            d_ln_d_per_ln_fz(truth.at("tyre").get<std::string>(), wheel_load_n);
+      *m *= kLoadPerDecelPerHoverL * inj.tyre_laws.peak_exponent;
     }
   }
   return out;

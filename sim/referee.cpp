@@ -12,6 +12,7 @@
 #include "core/identify.hpp"
 #include "core/pipeline/event_csv.hpp"
 #include "core/pipeline/pipeline.hpp"
+#include "core/tyre/mf61.hpp"
 #include "sim/referee_internal.hpp"
 #include "sim/second/generator.hpp"
 #include "sim/simulator.hpp"
@@ -209,6 +210,28 @@ sim2::Stations g_stations = sim2::Stations::Cars;  // set once by the referee be
 double g_export_hz = 0;                            // the same
 }  // namespace
 
+namespace {
+/// Generator B's tyre's load laws at fz_n. B reads its braking curve at positive slip, so its E
+/// takes (1 - PEX4) where MF 6.1 braking takes (1 + PEX4): its PEX4 enters with its sign turned.
+tyre::LoadLaws load_laws_of(const sim2::Mf61Longitudinal& t, double fz_n) {
+  tyre::Mf61Tyre m;
+  m.ref.fnomin_n = t.fnomin_n;
+  m.ref.lfzo = t.lfzo;
+  auto set = [&m](tyre::Coef k, double v) { m.coef[static_cast<std::size_t>(k)] = v; };
+  set(tyre::Coef::PCX1, t.pcx1);
+  set(tyre::Coef::PDX1, t.pdx1);
+  set(tyre::Coef::PDX2, t.pdx2);
+  set(tyre::Coef::PEX1, t.pex1);
+  set(tyre::Coef::PEX2, t.pex2);
+  set(tyre::Coef::PEX3, t.pex3);
+  set(tyre::Coef::PEX4, -t.pex4);
+  set(tyre::Coef::PKX1, t.pkx1);
+  set(tyre::Coef::PKX2, t.pkx2);
+  set(tyre::Coef::PKX3, t.pkx3);
+  return tyre::load_laws_at(m, fz_n);
+}
+}  // namespace
+
 void set_generator_b_stations(sim2::Stations s) {
   g_stations = s;
 }
@@ -228,6 +251,10 @@ std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, doubl
   if (inj.pair()) inj.magnitude2 = set.magnitudes.back();
   if (std::isfinite(inj.load_transfer_magnitude()))
     inj.load_per_decel = set.runs.front().load_per_decel;
+  try {  // a file without a law at this load keeps published tyres' (never refuses the set)
+    inj.tyre_laws = load_laws_of(set.runs.front().tyre, set.runs.front().fz_n);
+  } catch (const InputError&) {
+  }
   if (sample_hz <= 0) sample_hz = g_export_hz;
   if (sample_hz > 0) {
     for (auto& run : set.runs) run.tester.sample_hz = sample_hz;
@@ -260,6 +287,24 @@ void set_outside_runs(OutsideRuns f) {
 }
 
 namespace {
+bool g_tyre_file_known = false;  // set once by the referee before its threads start
+
+/// The gates, with the trial's tyre's load laws where its file is taken as known.
+gap::Options with_tyre_file(const gap::Options& o, const Injection& inj) {
+  gap::Options out = o;
+  if (g_tyre_file_known) {
+    out.tyre_load_laws = inj.tyre_laws;
+    out.tyre_load_laws_source = "the simulated tyre's file";
+  }
+  return out;
+}
+}  // namespace
+
+void set_tyre_file_known(bool known) {
+  g_tyre_file_known = known;
+}
+
+namespace {
 
 /// Blinded: the diagnosis sees the runs only (start values from a least-squares fit of their
 /// pooled points, as `brakefit gap` does without a model).
@@ -271,21 +316,22 @@ gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
     if (c == gap::Condition::RollerToRoad || !g_outside)
       throw InputError("generator C makes roller and ground runs, through the referee's runner");
     const auto runs = g_outside(inj, seed);
-    return gap::diagnose(runs, pooled_start(runs), o);
+    return gap::diagnose(runs, pooled_start(runs), with_tyre_file(o, inj));
   }
   if (inj.generator == Generator::B) {
     if (c == gap::Condition::RollerToRoad)
       throw InputError("generator B makes model-vs-measurement runs (roller, ground) only");
     const auto runs = generator_b_runs(inj, seed);
-    return gap::diagnose(runs, pooled_start(runs), o);
+    return gap::diagnose(runs, pooled_start(runs), with_tyre_file(o, inj));
   }
   if (c != gap::Condition::RollerToRoad) {
     const Scenario s = inject(
         referee_null(c == gap::Condition::Ground ? can::BenchKind::Ground : can::BenchKind::Roller),
         inj);
     set_load_truth(inj, s);
+    inj.tyre_laws = detail::load_laws(s);
     const auto runs = simulate_runs(s, seed);
-    return gap::diagnose(runs, pooled_start(runs), o);
+    return gap::diagnose(runs, pooled_start(runs), with_tyre_file(o, inj));
   }
   Scenario roller = referee_null(can::BenchKind::Roller);
   Scenario road = referee_null(can::BenchKind::Ground);
@@ -295,9 +341,11 @@ gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
     road = inject(road, inj);
     set_load_truth(inj, road);
   }
+  inj.tyre_laws = detail::load_laws(road);
   const auto roller_runs = simulate_runs(roller, seed);
   const auto road_runs = simulate_runs(road, seed + 7'777'777);
-  return gap::diagnose_transfer(roller_runs, road_runs, pooled_start(roller_runs), o);
+  return gap::diagnose_transfer(roller_runs, road_runs, pooled_start(roller_runs),
+                                with_tyre_file(o, inj));
 }
 
 }  // namespace

@@ -43,6 +43,10 @@ struct Injection {
   /// Load transfer's truth as the wheel load's relative change per m/s^2 of deceleration
   /// (dFz/Fz), set where the runs are made (NaN: no load transfer).
   double load_per_decel = NAN;
+  /// The simulated tyre's load laws at the set's wheel load (what its MF 6.1 file gives), set
+  /// where the runs are made: the diagnosis is given them where the tyre's file is taken as known
+  /// (set_tyre_file_known).
+  tyre::LoadLaws tyre_laws = {};
   /// What generator B drew for the set (vehicle, runs, export rate, speeds); empty for A and C.
   std::string station = {};
   /// The load transfer injected (first or second), its magnitude in the diagnosis's unit; NaN:
@@ -132,6 +136,10 @@ struct TrialResult {
 /// make.
 using OutsideRuns = std::function<std::vector<gap::Run>(Injection&, std::uint64_t seed)>;
 void set_outside_runs(OutsideRuns f);
+/// Every trial's diagnosis is given its tyre's own load laws (Injection::tyre_laws), as `brakefit
+/// gap --tir` is given the tyre's file (default: not, published tyres' laws). Set before the
+/// referee's threads start.
+void set_tyre_file_known(bool known);
 
 /// The seeds bench/gap_referee gives its pair draws, its pair trials and its misspecified sets,
 /// here so that a test reruns one of them as the referee ran it.

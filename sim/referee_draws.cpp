@@ -66,6 +66,21 @@ double d_ln_d_per_ln_fz(const Scenario& s) {
   return std::log(pac96_equivalent(s.tyre, b).D / pac96_equivalent(s.tyre, a).D) / std::log(1.01);
 }
 
+tyre::LoadLaws load_laws(const Scenario& s) {
+  TyreState a;
+  a.fz_n = s.wheel_load_n / 1.005;
+  a.pressure_bar = s.tyre_pressure_bar;
+  TyreState b = a;
+  b.fz_n = s.wheel_load_n * 1.005;
+  const MfParams lo = pac96_equivalent(s.tyre, a), hi = pac96_equivalent(s.tyre, b);
+  const double dln = std::log(b.fz_n / a.fz_n);
+  tyre::LoadLaws l;
+  l.peak_exponent = std::log(hi.D / lo.D) / dln;
+  l.kx_over_peak = std::log(hi.B * hi.C * hi.D / (lo.B * lo.C * lo.D)) / dln / l.peak_exponent;
+  l.e_per_peak_scale = (hi.E - lo.E) / dln / l.peak_exponent;
+  return l;
+}
+
 /// A relaxation (sigma / V) or a time offset: at one speed, one lag.
 bool is_lag(const std::string& e) {
   return e == "relaxation_length" || e == "time_offset";

@@ -2,12 +2,15 @@
 // law's units, roller vs road, the gates and the fit-quality factor against null sets.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
 #include "core/pipeline/pipeline.hpp"
 #include "sim/referee.hpp"
+#include "sim/referee_internal.hpp"
 #include "sim/simulator.hpp"
 #include "tests/unit/sim_test_util.hpp"
 
@@ -128,6 +131,34 @@ TEST(GapReferee, LoadTransferIsReadAtTheTyresOwnLoadLawsWhereGiven) {
   EXPECT_LT(given.q, 0.97 * published.q);
   EXPECT_NE(given.note.find("the tyre's own file, tyre.tir"), std::string::npos) << given.note;
   EXPECT_NE(published.note.find("published MF 6.1 tyres"), std::string::npos) << published.note;
+}
+
+TEST(GapReferee, WithTheTyresFileEachTrialIsGivenItsTyresLoadLaws) {
+  // gap_referee --tyre-file 1: trial 43's set diagnosed with its tyre's own load laws, as `gap
+  // --tir` would be; the held ratio is the simulated tyre's, and the load change it reads lies
+  // closer to the truth than at published tyres' laws.
+  const sim::Injection inj{"load_transfer", 0.02269, gap::Condition::Ground};
+  const auto read = [&](bool known) {
+    sim::set_tyre_file_known(known);
+    const auto t = sim::run_trial(inj, 101043, gap::calibrated_options(gap::Condition::Ground));
+    sim::set_tyre_file_known(false);
+    return t;
+  };
+  const auto own = read(true), published = read(false);
+  ASSERT_FALSE(own.verdict.empty());
+  EXPECT_EQ(own.verdict.front(), "load_transfer");
+  const double own_ratio =
+      sim::detail::load_laws(sim::inject(sim::referee_null(can::BenchKind::Ground), inj))
+          .kx_over_peak;
+  bool noted = false;
+  for (const auto& n : own.notes)
+    noted |= n.find(fmt::format("load ratio held at {:.2f}", own_ratio)) != std::string::npos &&
+             n.find("the simulated tyre's file") != std::string::npos;
+  EXPECT_TRUE(noted);
+  const double truth = own.truth.load_per_decel;
+  EXPECT_LT(std::abs(own.load_per_decel_estimate / truth - 1),
+            std::abs(published.load_per_decel_estimate / truth - 1));
+  EXPECT_NEAR(own.load_per_decel_estimate, truth, 0.05 * truth);
 }
 
 TEST(GapReferee, RollerVsRoadNamesTheTransferEffect) {

@@ -10,6 +10,8 @@
 #include "core/curve.hpp"
 #include "core/tyre/load_laws.hpp"
 #include "core/tyre/tir_numbers.hpp"
+#include "sim/referee.hpp"
+#include "sim/referee_internal.hpp"
 #include "sim/second/tir.hpp"
 #include "sim/second/tyre.hpp"
 
@@ -88,6 +90,20 @@ TEST_P(LoadLaws, FollowTheCurveReadAtNeighbouringLoads) {
 INSTANTIATE_TEST_SUITE_P(PublishedTyres, LoadLaws,
                          ::testing::Values("car_185_65r15.tir", "car_225_50r17.tir",
                                            "tno_205_60r15.tir", "van_215_65r16c.tir"));
+
+TEST(LoadLaws, GeneratorAsTyreReadOffItsCurvesHasItsFilesLaws) {
+  // Generator A simulates the TNO 205/60R15 through its own MF 6.1 code; the referee reads its
+  // laws off the Pacejka-96 equivalents at loads 1 % apart. They are the file's, worked out.
+  const sim::Scenario s = sim::referee_null(can::BenchKind::Ground);
+  const tyre::LoadLaws a = sim::detail::load_laws(s);
+  const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/sim/second/tyres/tno_205_60r15.tir";
+  const tyre::LoadLaws f = tyre::load_laws_at(
+      tyre::tyre_from_tir(sim2::parse_tir(slurp(path), path).numbers, path), s.wheel_load_n);
+  EXPECT_NEAR(a.peak_exponent, f.peak_exponent, 1e-3);
+  EXPECT_NEAR(a.kx_over_peak, f.kx_over_peak, 1e-3);
+  EXPECT_NEAR(a.e_per_peak_scale, f.e_per_peak_scale, 2e-3);
+  EXPECT_GT(std::abs(f.kx_over_peak - 1.25), 0.05);  // not the published tyres' it stands beside
+}
 
 TEST(LoadLawsRefused, AFileWithoutAReferenceLoadNamesTheKey) {
   tyre::TirNumbers n;
