@@ -5,6 +5,7 @@ import json
 import math
 import os
 import random
+import re
 import tempfile
 import unittest
 
@@ -248,6 +249,19 @@ class Gap(unittest.TestCase):
                 self.assertAlmostEqual(read[given], lt["params"]["dfz_per_decel_s2_per_m"]
                                        / doc["tyre_load_laws"]["peak_load_exponent"], places=12)
             self.assertNotAlmostEqual(read[True], read[False], places=3)
+            # A car declared from its geometry is held at the file's laws too.
+            model = os.path.join(tmp, "ground.toml")
+            r = run("gap", "--bench-model", model, "--vehicle-mass", "1300", "--cg-height", "0.55",
+                    "--wheelbase", "2.6", "--tir", tir, *runs)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(model) as f:
+                text = f.read()
+            self.assertIn(f"both the tyre's own ({tir})", text)
+            held = re.search(r"\[effects.load_transfer\]\ndfz_per_decel_s2_per_m = (\S+)", text)
+            self.assertAlmostEqual(float(held.group(1)), 1300 * 0.55 / (2 * 2.6 * 3800) * peak,
+                                   places=6)
+            self.assertAlmostEqual(float(re.search(r"kx_load_ratio = (\S+)", text).group(1)),
+                                   kx / peak, places=6)
             # A file that describes no tyre is refused, naming the file and what is missing.
             bad = write(tmp, "bad.tir", "[LONGITUDINAL_COEFFICIENTS]\nPCX1 = 1.6\n")
             r = run("gap", "--tir", bad, *runs)
