@@ -262,6 +262,12 @@ class Gap(unittest.TestCase):
                                    places=6)
             self.assertAlmostEqual(float(re.search(r"kx_load_ratio = (\S+)", text).group(1)),
                                    kx / peak, places=6)
+            # A roller has no load transfer: the file is said to be unused.
+            roller = [os.path.join(REC, f"roller_2p2bar_{r}.log") for r in ("slow", "fast")]
+            r = run("gap", "--json", "--tir", tir, *roller)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("a roller has no load transfer; the file's laws are not used", r.stderr)
+            self.assertEqual(json.loads(r.stdout)["tyre_load_laws"]["source"], "published")
             # A file that describes no tyre is refused, naming the file and what is missing.
             bad = write(tmp, "bad.tir", "[LONGITUDINAL_COEFFICIENTS]\nPCX1 = 1.6\n")
             r = run("gap", "--tir", bad, *runs)
