@@ -83,6 +83,16 @@ def write_stand_in(build):
     os.chmod(stand_in, os.stat(stand_in).st_mode | stat.S_IEXEC)
 
 
+def stand_ins(tmp):
+    """A stand-in brakefit under tmp/build and a stand-in gen_c.py: (build, gen_c)."""
+    build = os.path.join(tmp, "build")
+    write_stand_in(build)
+    gen_c = os.path.join(tmp, "gen_c.py")
+    with open(gen_c, "w") as f:
+        f.write(GEN_C.format(here=os.path.dirname(os.path.abspath(__file__))))
+    return build, gen_c
+
+
 class CSuite(unittest.TestCase):
     def test_scores_each_set_and_writes_its_section(self):
         with tempfile.TemporaryDirectory() as tmp:
@@ -120,11 +130,7 @@ class CSuite(unittest.TestCase):
 
     def test_several_seeds_pool_their_suites_into_a_block_of_its_own(self):
         with tempfile.TemporaryDirectory() as tmp:
-            build = os.path.join(tmp, "build")
-            write_stand_in(build)
-            gen_c = os.path.join(tmp, "gen_c.py")
-            with open(gen_c, "w") as f:
-                f.write(GEN_C.format(here=os.path.dirname(os.path.abspath(__file__))))
+            build, gen_c = stand_ins(tmp)
             results = os.path.join(tmp, "results.md")
             with open(results, "w") as f:
                 f.write("# R\n\n<!-- gap_c_suite begin -->\nseed 77\n<!-- gap_c_suite end -->\n")
@@ -147,11 +153,7 @@ class CSuite(unittest.TestCase):
 
     def test_with_tir_each_set_gets_its_tyres_file_from_generator_cs_table(self):
         with tempfile.TemporaryDirectory() as tmp:
-            build = os.path.join(tmp, "build")
-            write_stand_in(build)
-            gen_c = os.path.join(tmp, "gen_c.py")
-            with open(gen_c, "w") as f:
-                f.write(GEN_C.format(here=os.path.dirname(os.path.abspath(__file__))))
+            build, gen_c = stand_ins(tmp)
             p = subprocess.run([sys.executable, SCRIPT, "--gen-c", gen_c, "--seed", "3", "--tir",
                                 "--build", build], capture_output=True, text=True, timeout=120)
             self.assertEqual(p.returncode, 0, p.stderr)
