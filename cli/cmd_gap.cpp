@@ -230,9 +230,10 @@ void add_gap_command(CLI::App& app) {
     gap::Options gap_options = gap::calibrated_options(condition);
     if (std::isfinite(o->gate_gain)) gap_options.gate_gain = o->gate_gain;
     gap_options.vehicle_mass_kg = o->vehicle_mass_kg;
-    if (!o->tir.empty() && condition == gap::Condition::Roller)
-      spdlog::warn("gap: --tir {}: a roller has no load transfer; the file's laws are not used",
-                   o->tir);
+    if (!o->tir.empty() && condition != gap::Condition::Ground)
+      spdlog::warn("gap: --tir {}: {}; the file's laws are not used", o->tir,
+                   transfer ? "roller vs road gives a load transfer at its free stiffness ratio"
+                            : "a roller has no load transfer");
     else if (!o->tir.empty()) {
       gap_options.tyre_load_laws = tyre_load_laws_from(o->tir, runs);
       gap_options.tyre_load_laws_source = o->tir;

@@ -9,7 +9,7 @@ import re
 import tempfile
 import unittest
 
-from test_cli import pac96, run, slip_on_rise, svg_series, write
+from test_cli import ROOT, pac96, run, slip_on_rise, svg_series, write
 from test_recorded import REC, recorded
 
 
@@ -329,7 +329,12 @@ class Gap(unittest.TestCase):
         sc = doc["mf61_scaling"]
         self.assertEqual([f["name"] for f in sc["factors"]], ["LMUX", "LKX", "LCX", "LEX"])
         self.assertLess(sc["rms_pct_peak"], sc["unscaled_rms_pct_peak"])
-        table = run("gap", "--roller", *roller, "--road", *road).stdout
+        # (A tyre's file is said to be unused here: roller vs road fits load transfer's ratio.)
+        tno = os.path.join(ROOT, "sim", "second", "tyres", "tno_205_60r15.tir")
+        r = run("gap", "--tir", tno, "--roller", *roller, "--road", *road)
+        self.assertIn("roller vs road gives a load transfer at its free stiffness ratio; the "
+                      "file's laws are not used", r.stderr)
+        table = r.stdout
         self.assertIn("each effect alone against the baseline:", table)
         self.assertRegex(table, r"MF 6.1 scaling factors.*\n  LMUX +[0-9.]+  \+- ")
         self.assertRegex(table, r"effect\s+parameters\s+gain\s+dBIC\s+decision")
