@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <utility>
@@ -37,21 +39,40 @@ constexpr const char* kPairScript = BRAKEFIT_SOURCE_DIR "/bench/gen_c_pair.py";
 /// The script's tyres as MF 6.1 files (its own coefficients, read from its TYRES table).
 constexpr const char* kTyreScript = BRAKEFIT_SOURCE_DIR "/bench/gen_c_tyres.py";
 
-/// The load laws of the script's tyre `name` at fz_n, from its file written into dir.
-tyre::LoadLaws c_tyre_laws(const std::string& script, const std::filesystem::path& dir,
-                           const std::string& name, double fz_n) {
-  const std::filesystem::path tyres = dir / "tyres";
+/// The script's tyres, written by bench/gen_c_tyres.py into dir and read once per script (a run of
+/// the referee reads one script; its trials share the tyres).
+const std::map<std::string, tyre::Mf61Tyre>& c_tyres(const std::string& script,
+                                                     const std::filesystem::path& dir) {
+  static std::mutex mutex;
+  static std::map<std::string, std::map<std::string, tyre::Mf61Tyre>> read;
+  const std::lock_guard lock(mutex);
+  if (const auto it = read.find(script); it != read.end()) return it->second;
+  const std::filesystem::path out = dir / "tyres";
   const std::string cmd = fmt::format("{} '{}' '{}' '{}' >/dev/null 2>'{}'", kPython, kTyreScript,
-                                      script, tyres.string(), (dir / "stderr").string());
+                                      script, out.string(), (dir / "stderr").string());
   if (std::system(cmd.c_str()) != 0)
     throw GeneratorError(fmt::format("generator C's tyres: {}: {}", cmd, slurp(dir / "stderr")));
-  const std::filesystem::path file = tyres / (name + ".tir");
-  if (!std::filesystem::exists(file))
-    throw GeneratorError(fmt::format("generator C: unknown tyre '{}'", name));
-  const std::string source = file.string();
+  std::map<std::string, tyre::Mf61Tyre> tyres;
+  for (const auto& f : std::filesystem::directory_iterator(out)) {
+    const std::string source = f.path().string();
+    try {
+      tyres[f.path().stem().string()] =
+          tyre::tyre_from_tir(sim2::parse_tir(slurp(f.path()), source).numbers, source);
+    } catch (const InputError& e) {
+      throw GeneratorError(fmt::format("generator C's tyre: {}", e.what()));
+    }
+  }
+  return read.emplace(script, std::move(tyres)).first->second;
+}
+
+/// The load laws of the script's tyre `name` at fz_n.
+tyre::LoadLaws c_tyre_laws(const std::string& script, const std::filesystem::path& dir,
+                           const std::string& name, double fz_n) {
+  const auto& tyres = c_tyres(script, dir);
+  const auto it = tyres.find(name);
+  if (it == tyres.end()) throw GeneratorError(fmt::format("generator C: unknown tyre '{}'", name));
   try {
-    return tyre::load_laws_at(
-        tyre::tyre_from_tir(sim2::parse_tir(slurp(file), source).numbers, source), fz_n);
+    return tyre::load_laws_at(it->second, fz_n);
   } catch (const InputError& e) {
     throw GeneratorError(fmt::format("generator C's tyre {}: {}", name, e.what()));
   }

@@ -34,16 +34,13 @@ gap::BenchEffect declared_load_transfer(gap::Condition condition, const std::vec
     throw ExitError(kExitUsage,
                     "gap: a declared load transfer needs --vehicle-mass, --cg-height and "
                     "--wheelbase together");
-  std::vector<double> loads;
-  for (const auto& r : runs)
-    if (r.wheel_load_n > 0) loads.push_back(r.wheel_load_n);
-  if (loads.empty())
+  const double fz_n = gap::median_wheel_load_n(runs);
+  if (!(fz_n > 0))
     throw ExitError(kExitDataError,
                     "gap: the runs carry no wheel load (the bench calibration's wheel_load_n): "
                     "the declared load transfer cannot be put relative to it");
-  std::sort(loads.begin(), loads.end());
-  return gap::declared_load_transfer(mass_kg, cg_height_m, wheelbase_m, loads[loads.size() / 2],
-                                     front, laws.tyre_load_laws, laws.tyre_load_laws_source);
+  return gap::declared_load_transfer(mass_kg, cg_height_m, wheelbase_m, fz_n, front,
+                                     laws.tyre_load_laws, laws.tyre_load_laws_source);
 }
 
 /// The declared load transfer in the bench model, in place of any the diagnosis measured.

@@ -3,26 +3,21 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include <algorithm>
-
 #include "cli/io.hpp"
 #include "core/curve.hpp"
+#include "core/gap/gap.hpp"
 #include "core/tyre/tir_numbers.hpp"
 #include "sim/second/tir.hpp"
 
 namespace brakefit::cli {
 
 tyre::LoadLaws tyre_load_laws_from(const std::string& path, const std::vector<gap::Run>& runs) {
-  std::vector<double> loads;
-  for (const auto& r : runs)
-    if (r.wheel_load_n > 0) loads.push_back(r.wheel_load_n);
-  if (loads.empty())
+  const double fz_n = gap::median_wheel_load_n(runs);
+  if (!(fz_n > 0))
     throw ExitError(kExitDataError,
                     fmt::format("gap: --tir {}: the runs carry no wheel load (the bench "
                                 "calibration's wheel_load_n), at which the file's laws are read",
                                 path));
-  std::sort(loads.begin(), loads.end());
-  const double fz_n = loads[loads.size() / 2];
   try {
     const tyre::Mf61Tyre t =
         tyre::tyre_from_tir(sim2::parse_tir(read_file(path), path).numbers, path);

@@ -149,6 +149,10 @@ struct Options {
       0.15;  ///< two candidates whose gains differ less than this are "not separable"
 };
 
+/// The runs' median wheel load (the bench calibration's wheel_load_n), N; 0 where none carries
+/// one. Load transfer is put relative to it.
+double median_wheel_load_n(const std::vector<Run>& runs);
+
 struct EffectScore {
   Effect effect{};
   std::vector<std::pair<std::string, double>> params;

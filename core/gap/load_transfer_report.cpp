@@ -41,6 +41,14 @@ void pitch_note(Report& rep, EffectScore& e) {
 
 }  // namespace
 
+double median_wheel_load_n(const std::vector<Run>& runs) {
+  std::vector<double> loads;
+  for (const Run& r : runs)
+    if (r.wheel_load_n > 0) loads.push_back(r.wheel_load_n);
+  std::sort(loads.begin(), loads.end());
+  return loads.empty() ? 0.0 : loads[loads.size() / 2];
+}
+
 /// Load transfer, once named, is measured with the stiffness ratio held at the tyre's load laws
 /// (Options::tyre_load_laws: its own file's or published tyres'; Effect::LoadTransferMeasured): its
 /// score's magnitude is that fit's q; the free fit's q stays beside it
@@ -53,11 +61,7 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
   if (lt == model.end()) return;
   *lt = Effect::LoadTransferMeasured;
   const double q = fit(pointers(runs), model).params.at(*param_offset(model, *lt));
-  std::vector<double> loads;
-  for (const Run& r : runs)
-    if (r.wheel_load_n > 0) loads.push_back(r.wheel_load_n);
-  std::sort(loads.begin(), loads.end());
-  const double fz_n = loads.empty() ? 0.0 : loads[loads.size() / 2];
+  const double fz_n = median_wheel_load_n(runs);
   for (auto& e : rep.effects) {
     if (e.effect != Effect::LoadTransfer || !e.accepted || e.params.size() < 2) continue;
     const double q_free = e.params[0].second, ratio = e.params[1].second;
