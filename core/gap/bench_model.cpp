@@ -20,7 +20,7 @@ void sort_effects(BenchModel& m) {
 /// A named load transfer is held at its measured magnitude (the stiffness's load ratio at the
 /// tyre's load laws), not at the free fit's: the free ratio can end far from any tyre's (0.38 on
 /// a ground set whose only effect was the wheel's inertia, where undoing the free fit's q put the
-/// tyre 30 % off), while q at the published ratio is what the report gives as the magnitude.
+/// tyre 30 % off), while q at the held ratio is what the report gives as the magnitude.
 void hold_measured_load_transfer(const Report& rep, BenchEffect& b) {
   for (const auto& sc : rep.effects) {
     if (sc.effect != Effect::LoadTransfer || !sc.accepted) continue;
