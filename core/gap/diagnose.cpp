@@ -73,8 +73,12 @@ Report diagnose_runs(const std::vector<Run>& runs_in, const MfParams& start, con
   if (declared_load)
     rep.notes.push_back(fmt::format(
         "load transfer declared from the vehicle (D by 1 + {:.4g} per m/s^2 of deceleration, the "
-        "slip stiffness by that to the power {:.2f}): held in every fit, not a candidate",
-        o.declared_load_per_decel_s2_per_m, o.declared_kx_load_ratio));
+        "slip stiffness by that to the power {:.2f}{}): held in every fit, not a candidate",
+        o.declared_load_per_decel_s2_per_m, o.declared_kx_load_ratio,
+        o.tyre_load_laws.e_per_peak_scale == 0.0
+            ? std::string()
+            : fmt::format(", E by {:.3g} per unit of D's change",
+                          o.tyre_load_laws.e_per_peak_scale)));
   if (std::string note = share_roller_droop(runs); !note.empty()) rep.notes.push_back(note);
   if (std::string note = short_runs_note(runs); !note.empty()) rep.notes.push_back(note);
   // A constant quantised reference leaves a slip bias common to the runs within half a step: a

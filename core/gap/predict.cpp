@@ -193,9 +193,11 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
     exp_in_place(power);
     for (std::size_t i = 0; i < n; ++i) b_scale[i] *= power[i];
   };
+  // A declared load is read through the tyre's load laws as a measured one is: E too changes
+  // with the load where the tyre's file gives it (0 at published tyres' laws).
   if (const double q = r.declared_load_per_decel_s2_per_m; q != 0 && r.ref_decel_mps2.size() == n)
     follow_load(centred_mean(r.t_s, r.ref_decel_mps2, kDeclaredLoadHalfWindowS), q,
-                r.declared_kx_load_ratio, 0.0);
+                r.declared_kx_load_ratio, r.load_laws.e_per_peak_scale);
   std::size_t next = 4;  // index of the current effect's first parameter in p
   for (const Effect effect : effects) {
     const double q = p[next];

@@ -44,11 +44,13 @@ struct Run {
   double pressure_filter_s = 0.0;
   /// A load transfer declared from the vehicle (Options::declared_load_per_decel_s2_per_m): D by
   /// 1 + q a and B C D by (1 + q a)^r, a the reference's deceleration through a +-20 ms centred
-  /// mean, in every fit, as a known part of the tyre's curve (0: none declared).
+  /// mean, E by load_laws' change, in every fit, as a known part of the tyre's curve (0: none
+  /// declared).
   double declared_load_per_decel_s2_per_m = 0.0, declared_kx_load_ratio = 1.0;
   /// The tyre's load laws at which a named load transfer is measured
-  /// (Effect::LoadTransferMeasured): the slip stiffness's load ratio and E's change with the
-  /// load; published tyres' unless the tyre's file was given (Options::tyre_load_laws).
+  /// (Effect::LoadTransferMeasured) and a declared one held: the slip stiffness's load ratio and
+  /// E's change with the load; published tyres' unless the tyre's file was given
+  /// (Options::tyre_load_laws).
   tyre::LoadLaws load_laws;
   /// The speed channels' noise (robust scale of second differences, at least step/sqrt(12)) and
   /// quantisation steps (0: not quantised), and the force channel's step, before smoothing.

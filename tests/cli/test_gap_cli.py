@@ -257,6 +257,8 @@ class Gap(unittest.TestCase):
             with open(model) as f:
                 text = f.read()
             self.assertIn(f"both the tyre's own ({tir})", text)
+            # ... E's change with the load among them, as the measured load transfer's.
+            self.assertIn(f"E by {e:.3g} per unit of D's change", r.stdout)
             held = re.search(r"\[effects.load_transfer\]\ndfz_per_decel_s2_per_m = (\S+)", text)
             self.assertAlmostEqual(float(held.group(1)), 1300 * 0.55 / (2 * 2.6 * 3800) * peak,
                                    places=6)

@@ -210,6 +210,26 @@ TEST(BenchModel, ADeclaredLoadTransferIsHeldInTheFitsThroughASmoothedDeceleratio
   EXPECT_GT(moved, 0.1 * tyre[2]);  // a fifth more load at 6 m/s^2
   EXPECT_GT(noise_effect, 10.0);
   EXPECT_LT(noise_held, 0.1 * noise_effect);
+
+  // At a tyre's own load laws (its file given) E changes with the load too: the declared load
+  // is the measured load transfer's at the same q, not the one with E fixed.
+  steady.load_laws = tyre::LoadLaws{0.9, 1.4, 0.3};
+  steady.declared_kx_load_ratio = 1.4;
+  const auto held_at_laws = gap::predict(steady, tyre, {});
+  steady.load_laws.e_per_peak_scale = 0.0;
+  const auto held_e_fixed = gap::predict(steady, tyre, {});
+  steady.load_laws.e_per_peak_scale = 0.3;
+  const std::vector<double> measured_q{tyre[0], tyre[1], tyre[2], tyre[3], 0.034, 0.0, 0.0};
+  gap::Run undeclared = steady;
+  undeclared.declared_load_per_decel_s2_per_m = 0.0;
+  const auto measured = gap::predict(undeclared, measured_q, {gap::Effect::LoadTransferMeasured});
+  double off_laws = 0, e_moved = 0;
+  for (std::size_t i = 20; i + 20 < held.size(); ++i) {
+    off_laws = std::max(off_laws, std::abs(held_at_laws[i] - measured[i]));
+    e_moved = std::max(e_moved, std::abs(held_at_laws[i] - held_e_fixed[i]));
+  }
+  EXPECT_LT(off_laws, 1e-6 * tyre[2]);
+  EXPECT_GT(e_moved, 1e-3 * tyre[2]);  // E by 0.3 x 0.2 of D's change
 }
 
 TEST(BenchModel, AGroundWheelsLoadTransferIsUndoneToItsStaticLoad) {
