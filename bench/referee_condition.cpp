@@ -328,8 +328,9 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
                        {st.pairs, st.seed, st.threads, st.why, st.only, st.pick}, cname),
              /*merge_objects=*/true);
   if (st.detection > 0 && trial_gen == gate_gen && c != gap::Condition::RollerToRoad)
-    j.update(run_detection(c, trial_gen, gates.options,
-                           {st.detection, st.detection_levels, st.threads, st.seed}, cname),
+    j.update(run_detection(
+                 c, trial_gen, gates.options,
+                 {st.detection, st.detection_levels, st.threads, st.seed, st.why, st.only}, cname),
              /*merge_objects=*/true);
   return j;
 }
