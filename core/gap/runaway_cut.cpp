@@ -21,14 +21,17 @@ constexpr double kRunawayTyreRiseRatio = 1.02, kRunawayTyreFallRatio = 0.95;
 
 std::size_t runaway_cut(Run& full, const std::vector<double>& v_wheel, can::BenchKind bench,
                         const ConditionOptions& o) {
-  // On the roller a jump per sample is a slip rate only at one sample rate: at 100 Hz a 0.01
+  // A jump per sample is a slip rate only at one sample rate. On the roller at 100 Hz a 0.01
   // jump is a wheel at 5 km/h losing 1.4 m/s^2, still rolling on its curve, and the heavy
-  // wheel's inertial force (I a / R^2), kept at 500 Hz up to 7 m/s^2, would be cut with it. (On
-  // the ground at 30-130 km/h the same slip rate is a deceleration 5-65 times as large, and the
-  // runaway is read through the channel as well: there the jump per sample stays.)
+  // wheel's inertial force (I a / R^2), kept at 500 Hz up to 7 m/s^2, would be cut with it. On
+  // the ground the same slip rate is a deceleration 5-65 times as large, but at 50 Hz a truck's
+  // air brake ramps its slip by 0.012 a sample in the linear region (0.6 /s at 57 km/h): a jump
+  // of 0.01 there cut a run to two samples and left its set one run.
+  const double slip_per_s =
+      bench == can::BenchKind::Roller ? o.runaway_slip_per_s : o.ground_runaway_slip_per_s;
   const double runaway_slip_per_sample =
-      o.runaway_slip_per_sample > 0 && bench == can::BenchKind::Roller
-          ? std::max(o.runaway_slip_per_sample, o.runaway_slip_per_s * median_interval_s(full.t_s))
+      o.runaway_slip_per_sample > 0
+          ? std::max(o.runaway_slip_per_sample, slip_per_s * median_interval_s(full.t_s))
           : o.runaway_slip_per_sample;
   // The lock-up runaway: past the peak a wheel can lose speed within one or two frames. There the
   // slip is measured across a single frame and the force is dominated by the wheel's deceleration

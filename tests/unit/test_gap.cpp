@@ -141,6 +141,35 @@ TEST(GapCondition, ARunawayIsASlipRateNotAJumpPerSample) {
   EXPECT_LT(gap::condition("slow runaway", e, c, o).t_s.back(), 0.605);
 }
 
+TEST(GapCondition, ATrucksLinearRampAt50HzOnTheRoadIsNotARunaway) {
+  // Generator B's truck at 57 km/h exported at 50 Hz: its air brake ramps the slip from 3 % by
+  // 0.012 a sample (0.6 /s) to 11 %, then the wheel runs away (0.19 and 0.7 a sample). A jump of
+  // 0.01 per sample cut the run after two samples; at 4 /s it is cut where the wheel runs away.
+  const std::vector<double> slips{0.033, 0.032, 0.041, 0.053, 0.060,
+                                  0.069, 0.084, 0.106, 0.298, 0.95};
+  pipeline::Event e;
+  e.bench = can::BenchKind::Ground;
+  for (std::size_t i = 0; i < slips.size(); ++i) {
+    const double t = 0.02 * static_cast<double>(i);
+    pipeline::Sample smp;
+    smp.t_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
+    smp.v_ref_mps = 15.9 - 5.0 * t;
+    smp.v_wheel_mps = smp.v_ref_mps * (1 - slips[i]);
+    smp.pressure_bar = 0.3 + 12.0 * t;
+    e.samples.push_back(smp);
+  }
+  pipeline::Calibration c;
+  c.bench = can::BenchKind::Ground;
+  c.brake_gain_n_per_bar = 4000.0;
+  gap::ConditionOptions o;
+  o.smooth_half_window = 0;
+  const gap::Run r = gap::condition("truck at 50 Hz", e, c, o);
+  EXPECT_TRUE(r.runaway);
+  EXPECT_EQ(r.t_s.size(), 8u);      // up to 10.6 % slip
+  o.ground_runaway_slip_per_s = 0;  // per sample alone: cut at 0.041 -> 0.053
+  EXPECT_THROW(gap::condition("truck at 50 Hz", e, c, o), InputError);
+}
+
 TEST(Gap, WheelInertiaIsFoundFirst) {
   // Only the wheel's real inertia (1 kg m^2) differs from the 4-parameter model.
   sim::Scenario s = scenario("ideal_roller");
