@@ -154,11 +154,12 @@ double max_wheel_decel_mps2(const std::vector<Run>& runs);
 std::string reach_note(const std::vector<EffectReach>& reach, double max_decel_mps2,
                        const std::vector<Effect>& model);
 /// Where a run is cut (runaway_cut.cpp): the number of its samples kept, up to the wheel's
-/// lock-up runaway (the slip jumps by more than ConditionOptions::runaway_slip_per_sample and by
-/// more than the bench's slip rate over the sample interval, and stays up; on the ground not where
-/// the force channel falls with the tyre through it) or a locked wheel. Sets
-/// full.runaway and, at a cut, runaway_force_n (the force before the jump). v_wheel: the wheel's
-/// speed beside full's reference.
+/// lock-up runaway (the slip jumps by more than ConditionOptions::runaway_slip_per_sample, on the
+/// roller and by more than runaway_slip_per_s over the sample interval, on the ground by more than
+/// ground_runaway_slip_per_s over it where the jump per sample leaves too few samples; and stays
+/// up; on the ground not where the force channel falls with the tyre through it) or a locked wheel.
+/// Sets full.runaway and, at a cut, runaway_force_n (the force before the jump). v_wheel: the
+/// wheel's speed beside full's reference.
 std::size_t runaway_cut(Run& full, const std::vector<double>& v_wheel, can::BenchKind bench,
                         const ConditionOptions& o);
 /// A conditioned run decimated uniformly in time to max_points (decimation.cpp): every

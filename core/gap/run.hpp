@@ -163,12 +163,13 @@ struct ConditionOptions {
   int smooth_half_window = 10;   ///< zero-phase centred moving average of slip and speeds (samples)
   std::size_t max_points = 400;  ///< decimation for fitting
   /// Cut the run at the lock-up runaway: the first slip jump larger than this between two
-  /// samples (0: keep everything) and than runaway_slip_per_s (the roller's) or
-  /// ground_runaway_slip_per_s over the sample interval.
+  /// samples (0: keep everything) and, on the roller, than runaway_slip_per_s over the sample
+  /// interval; on the ground than ground_runaway_slip_per_s over it where the jump per sample
+  /// alone leaves too few samples for a diagnosis (a 50 Hz export of a fast stop).
   double runaway_slip_per_sample = 0.01;
   double runaway_slip_per_s = 10.0;
   /// On the road a slip rising 4 /s is the wheel losing 33 m/s^2 more than the car at 30 km/h,
-  /// 144 at 130: a lock-up at any road speed. From 400 Hz on the jump per sample asks more.
+  /// 144 at 130: a lock-up at any road speed.
   double ground_runaway_slip_per_s = 4.0;
   pipeline::ForceSource force = pipeline::ForceSource::Pressure;
 };

@@ -144,7 +144,8 @@ TEST(GapCondition, ARunawayIsASlipRateNotAJumpPerSample) {
 TEST(GapCondition, ATrucksLinearRampAt50HzOnTheRoadIsNotARunaway) {
   // Generator B's truck at 57 km/h exported at 50 Hz: its air brake ramps the slip from 3 % by
   // 0.012 a sample (0.6 /s) to 11 %, then the wheel runs away (0.19 and 0.7 a sample). A jump of
-  // 0.01 per sample cut the run after two samples; at 4 /s it is cut where the wheel runs away.
+  // 0.01 per sample cuts the run after two samples, too few: at 4 /s it is cut where the wheel
+  // runs away.
   const std::vector<double> slips{0.033, 0.032, 0.041, 0.053, 0.060,
                                   0.069, 0.084, 0.106, 0.298, 0.95};
   pipeline::Event e;
@@ -168,6 +169,27 @@ TEST(GapCondition, ATrucksLinearRampAt50HzOnTheRoadIsNotARunaway) {
   EXPECT_EQ(r.t_s.size(), 8u);      // up to 10.6 % slip
   o.ground_runaway_slip_per_s = 0;  // per sample alone: cut at 0.041 -> 0.053
   EXPECT_THROW(gap::condition("truck at 50 Hz", e, c, o), InputError);
+  // Where the jump per sample leaves enough, it stands: a slower ramp to 4 % (0.004 a sample)
+  // and then the same ramp from 4.1 % are cut at its first 0.012 jump, past 8 samples.
+  pipeline::Event longer = e;
+  longer.samples.clear();
+  std::vector<double> ramp;
+  for (int i = 0; i < 10; ++i) ramp.push_back(0.004 * i);
+  for (double x : slips)
+    if (x > 0.04) ramp.push_back(x);
+  for (std::size_t i = 0; i < ramp.size(); ++i) {
+    pipeline::Sample smp = e.samples.front();
+    const double t = 0.02 * static_cast<double>(i);
+    smp.t_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
+    smp.v_ref_mps = 15.9 - 5.0 * t;
+    smp.v_wheel_mps = smp.v_ref_mps * (1 - ramp[i]);
+    smp.pressure_bar = 0.3 + 12.0 * t;
+    longer.samples.push_back(smp);
+  }
+  o.ground_runaway_slip_per_s = 4.0;
+  const gap::Run cut = gap::condition("truck at 50 Hz, slower", longer, c, o);
+  EXPECT_TRUE(cut.runaway);
+  EXPECT_EQ(cut.t_s.size(), 11u);  // up to 4.1 %: 0.041 -> 0.053 jumps by more than 0.01
 }
 
 TEST(Gap, WheelInertiaIsFoundFirst) {
