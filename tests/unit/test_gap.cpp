@@ -35,6 +35,31 @@ void print(const gap::Report& r) {
   for (const auto& n : r.notes) std::cout << "  note: " << n << "\n";
 }
 
+/// An event of samples dt_s apart at these slips (up to 0.95): the reference slowing from v0_mps
+/// by decel_mps2, the line's pressure rising from p0_bar at bar_per_s.
+pipeline::Event event_at_slips(can::BenchKind bench, const std::vector<double>& slips, double dt_s,
+                               double v0_mps, double decel_mps2, double p0_bar, double bar_per_s) {
+  pipeline::Event e;
+  e.bench = bench;
+  for (std::size_t i = 0; i < slips.size(); ++i) {
+    const double t = dt_s * static_cast<double>(i);
+    pipeline::Sample smp;
+    smp.t_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
+    smp.v_ref_mps = v0_mps - decel_mps2 * t;
+    smp.v_wheel_mps = smp.v_ref_mps * (1 - std::min(slips[i], 0.95));
+    smp.pressure_bar = p0_bar + bar_per_s * t;
+    e.samples.push_back(smp);
+  }
+  return e;
+}
+
+pipeline::Calibration calibration(can::BenchKind bench, double brake_gain_n_per_bar) {
+  pipeline::Calibration c;
+  c.bench = bench;
+  c.brake_gain_n_per_bar = brake_gain_n_per_bar;
+  return c;
+}
+
 }  // namespace
 
 TEST(GapCondition, NoiseAlignmentStartStateAndLockCutOnASyntheticStop) {
@@ -115,22 +140,14 @@ TEST(GapCondition, ARunawayIsASlipRateNotAJumpPerSample) {
   // A roller run at 5 km/h exported at 100 Hz: past 3 % the slip rises at 3 /s (0.03 a sample,
   // the wheel losing 4 m/s^2 before it locks: a heavy wheel's inertial force, the tyre still
   // on its curve), then at 30 /s from 10 %. Cut where it runs away, not at the first 0.01 jump.
-  pipeline::Event e;
-  e.bench = can::BenchKind::Roller;
+  std::vector<double> slips;
   for (int i = 0; i < 80; ++i) {
     const double t = i * 0.01;
-    const double slip =
-        t < 0.6 ? 0.05 * t : (t < 0.6233 ? 0.03 + 3 * (t - 0.6) : 0.1 + 30 * (t - 0.6233));
-    pipeline::Sample smp;
-    smp.t_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
-    smp.v_ref_mps = 1.39;
-    smp.v_wheel_mps = 1.39 * (1 - std::min(slip, 0.95));
-    smp.pressure_bar = 50 * t;
-    e.samples.push_back(smp);
+    slips.push_back(t < 0.6 ? 0.05 * t
+                            : (t < 0.6233 ? 0.03 + 3 * (t - 0.6) : 0.1 + 30 * (t - 0.6233)));
   }
-  pipeline::Calibration c;
-  c.bench = can::BenchKind::Roller;
-  c.brake_gain_n_per_bar = 60.0;
+  const pipeline::Event e = event_at_slips(can::BenchKind::Roller, slips, 0.01, 1.39, 0, 0, 50);
+  const pipeline::Calibration c = calibration(can::BenchKind::Roller, 60.0);
   gap::ConditionOptions o;
   o.max_points = 1000;
   const gap::Run r = gap::condition("slow runaway", e, c, o);
@@ -148,20 +165,8 @@ TEST(GapCondition, ATrucksLinearRampAt50HzOnTheRoadIsNotARunaway) {
   // runs away.
   const std::vector<double> slips{0.033, 0.032, 0.041, 0.053, 0.060,
                                   0.069, 0.084, 0.106, 0.298, 0.95};
-  pipeline::Event e;
-  e.bench = can::BenchKind::Ground;
-  for (std::size_t i = 0; i < slips.size(); ++i) {
-    const double t = 0.02 * static_cast<double>(i);
-    pipeline::Sample smp;
-    smp.t_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
-    smp.v_ref_mps = 15.9 - 5.0 * t;
-    smp.v_wheel_mps = smp.v_ref_mps * (1 - slips[i]);
-    smp.pressure_bar = 0.3 + 12.0 * t;
-    e.samples.push_back(smp);
-  }
-  pipeline::Calibration c;
-  c.bench = can::BenchKind::Ground;
-  c.brake_gain_n_per_bar = 4000.0;
+  const pipeline::Event e = event_at_slips(can::BenchKind::Ground, slips, 0.02, 15.9, 5.0, 0.3, 12);
+  const pipeline::Calibration c = calibration(can::BenchKind::Ground, 4000.0);
   gap::ConditionOptions o;
   o.smooth_half_window = 0;
   const gap::Run r = gap::condition("truck at 50 Hz", e, c, o);
@@ -171,21 +176,12 @@ TEST(GapCondition, ATrucksLinearRampAt50HzOnTheRoadIsNotARunaway) {
   EXPECT_THROW(gap::condition("truck at 50 Hz", e, c, o), InputError);
   // Where the jump per sample leaves enough, it stands: a slower ramp to 4 % (0.004 a sample)
   // and then the same ramp from 4.1 % are cut at its first 0.012 jump, past 8 samples.
-  pipeline::Event longer = e;
-  longer.samples.clear();
   std::vector<double> ramp;
   for (int i = 0; i < 10; ++i) ramp.push_back(0.004 * i);
   for (double x : slips)
     if (x > 0.04) ramp.push_back(x);
-  for (std::size_t i = 0; i < ramp.size(); ++i) {
-    pipeline::Sample smp = e.samples.front();
-    const double t = 0.02 * static_cast<double>(i);
-    smp.t_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
-    smp.v_ref_mps = 15.9 - 5.0 * t;
-    smp.v_wheel_mps = smp.v_ref_mps * (1 - ramp[i]);
-    smp.pressure_bar = 0.3 + 12.0 * t;
-    longer.samples.push_back(smp);
-  }
+  const pipeline::Event longer =
+      event_at_slips(can::BenchKind::Ground, ramp, 0.02, 15.9, 5.0, 0.3, 12);
   o.ground_runaway_slip_per_s = 4.0;
   const gap::Run cut = gap::condition("truck at 50 Hz, slower", longer, c, o);
   EXPECT_TRUE(cut.runaway);
