@@ -50,6 +50,14 @@ std::size_t runaway_cut(Run& full, const std::vector<double>& v_wheel, can::Benc
     return before > 0 && top <= kRunawayTyreRiseRatio * before &&
            full.force_n[j - 1] < kRunawayTyreFallRatio * before;
   };
+  // The lock-up runaway: past the peak a wheel can lose speed within one or two frames. There the
+  // slip is measured across a single frame and the force is dominated by the wheel's deceleration
+  // (I a / R^2, a numerical derivative of a step): not quasi-static data. The run is cut where
+  // the slip first jumps by more than runaway_slip_per_sample between two samples and stays up
+  // (the next kRunawayHoldSamples samples above the level before the jump by that much): a light
+  // wheel on a long relaxation length at 2-3 km/h oscillates by +-4 % slip at 25 Hz, and each
+  // upswing of that is a jump that falls back, not a lock-up.
+  // A locked wheel is cut as well: the rim is held by the brake, I w' = F R - Tb no longer holds.
   auto cut_at = [&](double runaway_slip_per_sample) -> std::size_t {
     full.runaway = false;
     bool kept_runaway = false;
