@@ -152,8 +152,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
                                   r.estimate, ratio, before_ratio)
                     : fmt::format(" (gap before / floor {:.2f})", before_ratio));
     if ((!r.exact() && st.why) || st.why > 1) {
-      for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
-      for (const auto& line : r.scores) std::cerr << "    " << line << "\n";
+      print_indented(r.notes);
+      print_indented(r.scores);
     }
     if (said == "refused") {
       ++refused;
@@ -300,9 +300,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
         std::cerr << fmt::format("[{}] misspecified {} said {} (gap before / floor {:.2f})\n",
                                  cname, k, fmt::join(r.verdict, ", "),
                                  r.gap_before_n / std::max(r.noise_n, 1e-9));
-        for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
-        if (st.why > 1)
-          for (const auto& line : r.scores) std::cerr << "    " << line << "\n";
+        print_indented(r.notes);
+        if (st.why > 1) print_indented(r.scores);
       }
     }
     j["misspecified_trials"] = st.misspecified;

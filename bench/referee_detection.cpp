@@ -25,8 +25,8 @@ void print_miss(const std::string& cname, std::size_t set, const sim::TrialResul
       r.gap_after_n / floor_n,
       std::isnan(r.reach) ? std::string() : fmt::format(", reach {:.4g}", r.reach));
   if (!why) return;
-  for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
-  for (const auto& line : r.scores) std::cerr << "    " << line << "\n";
+  print_indented(r.notes);
+  print_indented(r.scores);
 }
 
 }  // namespace

@@ -51,8 +51,7 @@ nlohmann::ordered_json run_outside(gap::Condition c, sim::Generator trial_gen,
           r.gap_before_n / std::max(r.noise_n, 1e-9), r.gap_after_n / std::max(r.noise_n, 1e-9));
     if (right) continue;
     ++claimed[r.verdict.empty() ? "?" : r.verdict.front()];
-    if (st.why)
-      for (const auto& n : r.notes) std::cerr << "    " << n << "\n";
+    if (st.why) print_indented(r.notes);
   }
   j["counts"]["outside"] = st.n;
   j["counts"]["outside_ok"] = ok;

@@ -121,8 +121,8 @@ nlohmann::ordered_json run_pairs(gap::Condition c, sim::Generator trial_gen,
           kept[k], inj.effect, inj.magnitude, inj.effect2, inj.magnitude2,
           fmt::join(r.verdict, ", "), r.estimate, r.estimate2);
     if ((!r.correct() && st.why) || st.why > 1) {
-      for (const auto& note : r.notes) std::cerr << "    " << note << "\n";
-      for (const auto& line : r.scores) std::cerr << "    " << line << "\n";
+      print_indented(r.notes);
+      print_indented(r.scores);
     }
   }
   std::cout << fmt::format(

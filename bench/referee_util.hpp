@@ -17,6 +17,11 @@
 
 namespace brakefit::bench {
 
+/// Lines under a miss on stderr, indented (a trial's notes, its candidates' scores).
+inline void print_indented(const std::vector<std::string>& lines) {
+  for (const auto& line : lines) std::cerr << "    " << line << "\n";
+}
+
 inline double quantile(std::vector<double> v, double q) {
   if (v.empty()) return NAN;
   std::sort(v.begin(), v.end());
