@@ -98,9 +98,8 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
       s.heldout_rmse_after_n = heldout(runs, model, fit);
       if (e == Effect::LoadTransfer) {
         // Also held out with the stiffness's load ratio and E held at the tyre's laws, the model
-        // it is measured at once named: on a few runs the free ratio, fitted per fold, spends
-        // what the held-out run would have shown (C's road at h/L 0.07 was named in 4 of 10
-        // sets scored free only, in 10 of 10 with both).
+        // it is measured at once named: on a few runs the free ratio, fitted per fold, trades
+        // the tyre's shape for the load and spends what the held-out run would have shown.
         std::vector<Effect> measured = model;
         measured.back() = Effect::LoadTransferMeasured;
         s.heldout_rmse_after_n = std::min(s.heldout_rmse_after_n, heldout(runs, measured, fit));
