@@ -132,10 +132,10 @@ std::vector<WhereRow> where_rows(const std::vector<Run>& runs, const std::vector
                                  const std::vector<Effect>& baseline);
 /// A neutral Magic Formula for the runs: D their peak force, C 1.65, E 0, B from the initial slope.
 MfParams neutral_start(const std::vector<Run>& runs);
-/// Load transfer, once named (in rep.accepted), is measured with the stiffness ratio held at the
-/// published tyres' (Effect::LoadTransferMeasured): its score's magnitude becomes that fit's.
-/// Also given in the law's units: dFz/Fz per m/s^2 (through kPublishedPeakLoadExponent) and, with
-/// the vehicle's mass and the runs' wheel load, h/L = 2 Fz (dFz/Fz per m/s^2) / m.
+/// The model with its free load transfer held at the tyre's load laws (LoadTransferMeasured).
+std::vector<Effect> at_tyre_load_laws(std::vector<Effect> model);
+/// Load transfer, once named, is measured at_tyre_load_laws: its magnitude becomes that fit's, also
+/// as dFz/Fz per m/s^2 and, with the vehicle's mass and wheel load, h/L = 2 Fz (dFz/Fz)/m.
 void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
                            const Options& o);
 /// The smallest magnitude of each one-parameter candidate the runs could show (reach.cpp): its

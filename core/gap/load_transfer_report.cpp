@@ -41,6 +41,11 @@ void pitch_note(Report& rep, EffectScore& e) {
 
 }  // namespace
 
+std::vector<Effect> at_tyre_load_laws(std::vector<Effect> model) {
+  std::replace(model.begin(), model.end(), Effect::LoadTransfer, Effect::LoadTransferMeasured);
+  return model;
+}
+
 double median_wheel_load_n(const std::vector<Run>& runs) {
   std::vector<double> loads;
   for (const Run& r : runs)
@@ -56,11 +61,10 @@ double median_wheel_load_n(const std::vector<Run>& runs) {
 /// and its fit stays the model's: a note says both.
 void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitter& fit,
                            const Options& o) {
-  std::vector<Effect> model = rep.accepted;
-  const auto lt = std::find(model.begin(), model.end(), Effect::LoadTransfer);
-  if (lt == model.end()) return;
-  *lt = Effect::LoadTransferMeasured;
-  const double q = fit(pointers(runs), model).params.at(*param_offset(model, *lt));
+  const std::vector<Effect> model = at_tyre_load_laws(rep.accepted);
+  if (model == rep.accepted) return;
+  const double q =
+      fit(pointers(runs), model).params.at(*param_offset(model, Effect::LoadTransferMeasured));
   const double fz_n = median_wheel_load_n(runs);
   for (auto& e : rep.effects) {
     if (e.effect != Effect::LoadTransfer || !e.accepted || e.params.size() < 2) continue;

@@ -100,9 +100,8 @@ void select_effects(Report& rep, std::vector<Run>& runs, const std::vector<Effec
         // Also held out with the stiffness's load ratio and E held at the tyre's laws, the model
         // it is measured at once named: on a few runs the free ratio, fitted per fold, trades
         // the tyre's shape for the load and spends what the held-out run would have shown.
-        std::vector<Effect> measured = model;
-        measured.back() = Effect::LoadTransferMeasured;
-        s.heldout_rmse_after_n = std::min(s.heldout_rmse_after_n, heldout(runs, measured, fit));
+        s.heldout_rmse_after_n =
+            std::min(s.heldout_rmse_after_n, heldout(runs, at_tyre_load_laws(model), fit));
       }
       Fit f = fit(all, model);
       // With the tyre's shift and without it: an effect the baseline bent to the shift (load
