@@ -16,7 +16,9 @@ verdict is exactly ["none"]; a misspecified set when its first verdict is `none`
 misspecified). The magnitude error is the joint model's estimate (parameters_after) against the
 truth where the effect is named; load transfer's is the wheel load's change the report gives
 (dFz/Fz per m/s^2, the accepted effect's load_ratio_per_decel_s2_per_m) in C's law's unit, h/L
-(C's vehicle weighs 3.4 Fz0/g, so dFz/Fz per m/s^2 is 3.4 h/L / (2 g)).
+(C's vehicle weighs 3.4 Fz0/g, so dFz/Fz per m/s^2 is 3.4 h/L / (2 g)). Without the tyre's
+file the report also reads it at the ends of published tyres' laws: the table counts the sets
+whose truth lies inside that band.
 
 With --tir each set is diagnosed as a researcher who knows the tyre would: `brakefit gap --tir`
 with the set's tyre's MF 6.1 file, written from generator C's own coefficients (its TYRES table,
@@ -90,6 +92,19 @@ def load_ratio(doc):
     return None
 
 
+def load_band(doc):
+    """The load's change read at the ends of published tyres' load laws, in h/L (low, high), or
+    None where the report gives no band (read at the tyre's own file, or not named)."""
+    for e in doc.get("effects") or []:
+        if e.get("accepted") and e.get("name") == "load_transfer":
+            p = e.get("params") or {}
+            lo, hi = (p.get(f"load_ratio_per_decel_{k}_s2_per_m") for k in ("low", "high"))
+            if lo is None or hi is None:
+                return None
+            return lo * 2 * G_MPS2 / C_MASS_PER_LOAD, hi * 2 * G_MPS2 / C_MASS_PER_LOAD
+    return None
+
+
 def estimate(case, doc):
     """The joint model's estimate of the case's effect, in the truth's unit (None: not named)."""
     if case["effect"] == "load_transfer":
@@ -109,7 +124,7 @@ def score(truth, docs):
     rows = {"single": [0, 0], "load_transfer": [0, 0], "null": [0, 0], "misspec": [0, 0],
             "false_claims": [0, 0]}
     errors, misses, named = {}, [], []
-    per_effect, load_by_tyre = {}, {}
+    per_effect, load_by_tyre, band_by_tyre = {}, {}, {}
     for case, doc in zip(truth, docs):
         e, v = case["effect"], doc.get("verdict", [])
         if e == "none":
@@ -137,6 +152,11 @@ def score(truth, docs):
                 errors.setdefault(e, []).append(err)
                 if e == "load_transfer":
                     load_by_tyre.setdefault(case.get("tyre", "?"), []).append(err)
+                    if band := load_band(doc):
+                        inside = band[0] <= case["magnitude"] <= band[1]
+                        counts = band_by_tyre.setdefault(case.get("tyre", "?"), [0, 0])
+                        counts[0] += inside
+                        counts[1] += 1
                 named.append(f"{case['case']} {case['bench']} {e} {est:.4g} for "
                              f"{case['magnitude']:.4g}")
         if e in NO_EFFECT:
@@ -144,14 +164,14 @@ def score(truth, docs):
             rows["false_claims"][0] += bool(v) and v[0] not in ("none", "unexplained", "refused")
         if not ok:
             misses.append(f"{case['case']} {case['bench']} {e} {case['magnitude']:.4g} said {v}")
-    return rows, per_effect, errors, misses, named, load_by_tyre
+    return rows, per_effect, errors, misses, named, load_by_tyre, band_by_tyre
 
 
 def pct(a, b):
     return f"{a} of {b} ({100 * a / b:.0f} %)" if b else "–"
 
 
-def table(rows, per_effect, errors, load_by_tyre):
+def table(rows, per_effect, errors, load_by_tyre, band_by_tyre):
     out = ["| sets | result |", "|---|---|"]
     out.append(f"| single effects named first (lag and delay at one roller speed as one) | "
                f"{pct(*rows['single'])} |")
@@ -167,6 +187,12 @@ def table(rows, per_effect, errors, load_by_tyre):
     by_tyre = ", ".join(f"{t} {100 * statistics.median(v):.1f} % ({len(v)})"
                         for t, v in sorted(load_by_tyre.items()))
     out.append(f"| load transfer's error by tyre, median (sets) | {by_tyre or '–'} |")
+    inside = [sum(c[0] for c in band_by_tyre.values()), sum(c[1] for c in band_by_tyre.values())]
+    band = "; ".join([pct(*inside)] + [f"{t} {c[0]} of {c[1]}" for t, c in sorted(band_by_tyre.items())])
+    if not inside[1]:
+        band = "– (no band: read at the tyre's own laws)"
+    out.append("| load transfer's truth inside the report's band at published tyres' load laws "
+               f"(by tyre) | {band} |")
     return "\n".join(out)
 
 
@@ -233,7 +259,7 @@ def main():
                 c["case"] = c["case"] if len(seeds) == 1 else f"seed{seed}/{c['case']}"
             truth += cases
             docs += found
-    rows, per_effect, errors, misses, named, load_by_tyre = score(truth, docs)
+    rows, per_effect, errors, misses, named, load_by_tyre, band_by_tyre = score(truth, docs)
     minutes = (time.time() - start) / 60
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
@@ -241,7 +267,7 @@ def main():
     head = (f"<!-- written by `{command}` at commit {commit} ({datetime.date.today()}, "
             f"{minutes:.0f} min; {len(truth)} sets of generator C, "
             f"seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}) -->")
-    text = head + "\n\n" + table(rows, per_effect, errors, load_by_tyre)
+    text = head + "\n\n" + table(rows, per_effect, errors, load_by_tyre, band_by_tyre)
     print(text)
     print("\nmisses:\n" + "\n".join(misses or ["none"]))
     print("\nestimates where named:\n" + "\n".join(named))
@@ -252,6 +278,8 @@ def main():
                       "magnitude_error_median": {e: statistics.median(v) for e, v in errors.items()},
                       "load_transfer_error_median_by_tyre":
                           {t: statistics.median(v) for t, v in load_by_tyre.items()},
+                      "load_transfer_inside_published_band_by_tyre":
+                          {t: {"inside": c[0], "of": c[1]} for t, c in band_by_tyre.items()},
                       "misses": misses}))
     if a.results:
         write_results(a.results, text, a.results_key)

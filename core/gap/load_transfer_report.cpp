@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/gap/gap.hpp"
@@ -63,8 +64,25 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
                            const Options& o) {
   const std::vector<Effect> model = at_tyre_load_laws(rep.accepted);
   if (model == rep.accepted) return;
-  const double q =
-      fit(pointers(runs), model).params.at(*param_offset(model, Effect::LoadTransferMeasured));
+  const std::size_t at_q = *param_offset(model, Effect::LoadTransferMeasured);
+  const double q = fit(pointers(runs), model).params.at(at_q);
+  // Without the tyre's file the laws are published tyres', which differ from one tyre to another
+  // by more than the runs' noise moves the magnitude: it is read at each end of their spread too
+  // (the slip stiffness's ratio moves the fitted peak scale; the peak's exponent turns that into
+  // the load's change).
+  const bool own = !o.tyre_load_laws_source.empty();
+  std::array<double, 2> band{NAN, NAN};
+  if (!own) {
+    const tyre::PublishedLoadLawRange& pub = tyre::kPublishedLoadLawRange;
+    band = {q / pub.peak_exponent_high, q / pub.peak_exponent_low};
+    std::vector<Run> at = runs;
+    for (const double ratio : {pub.kx_over_peak_low, pub.kx_over_peak_high}) {
+      for (Run& r : at) r.load_laws.kx_over_peak = ratio;
+      const double q_at = fit(pointers(at), model).params.at(at_q);
+      band[0] = std::min(band[0], q_at / pub.peak_exponent_high);
+      band[1] = std::max(band[1], q_at / pub.peak_exponent_low);
+    }
+  }
   const double fz_n = median_wheel_load_n(runs);
   for (auto& e : rep.effects) {
     if (e.effect != Effect::LoadTransfer || !e.accepted || e.params.size() < 2) continue;
@@ -72,35 +90,56 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
     e.params[0].second = q;
     e.params.emplace_back("dfz_per_decel_free_ratio_s2_per_m", q_free);
     const tyre::LoadLaws& laws = o.tyre_load_laws;
-    const bool own = !o.tyre_load_laws_source.empty();
     const double load_per_decel = q / laws.peak_exponent;
     e.params.emplace_back("load_ratio_per_decel_s2_per_m", load_per_decel);
+    if (!own) {
+      e.params.emplace_back("load_ratio_per_decel_low_s2_per_m", band[0]);
+      e.params.emplace_back("load_ratio_per_decel_high_s2_per_m", band[1]);
+    }
     e.params.emplace_back("kx_load_ratio_held", laws.kx_over_peak);
     e.params.emplace_back("peak_load_exponent", laws.peak_exponent);
     std::string h_over_l;
     if (o.vehicle_mass_kg > 0 && fz_n > 0) {
-      const double v = 2.0 * fz_n * load_per_decel / o.vehicle_mass_kg;
+      const double per_load = 2.0 * fz_n / o.vehicle_mass_kg;
+      const double v = per_load * load_per_decel;
       e.params.emplace_back("cg_height_over_wheelbase", v);
+      if (!own) {
+        e.params.emplace_back("cg_height_over_wheelbase_low", per_load * band[0]);
+        e.params.emplace_back("cg_height_over_wheelbase_high", per_load * band[1]);
+      }
       h_over_l = fmt::format(
           "; with the vehicle's {:.0f} kg and the wheel's {:.0f} N, the centre of gravity's "
-          "height over the wheelbase is {:.3f} (h/L = 2 Fz (dFz/Fz per m/s^2) / m)",
-          o.vehicle_mass_kg, fz_n, v);
+          "height over the wheelbase is {:.3f}{} (h/L = 2 Fz (dFz/Fz per m/s^2) / m)",
+          o.vehicle_mass_kg, fz_n, v,
+          own ? std::string()
+              : fmt::format(", {:.3f}-{:.3f} at the ends of the published laws", per_load * band[0],
+                            per_load * band[1]));
     }
+    const tyre::PublishedLoadLawRange& pub = tyre::kPublishedLoadLawRange;
     const std::string whose =
         own ? fmt::format("the tyre's own file, {}, at the runs' wheel load",
                           o.tyre_load_laws_source)
-            : std::string(
-                  "published MF 6.1 tyres (their ratios 1.15-1.33, d ln D / d ln Fz "
-                  "0.87-0.97; the tyre's own file, where given, reads them at its own)");
+            : fmt::format(
+                  "published MF 6.1 tyres (their ratios {:.2f}-{:.2f}, d ln D / d ln Fz "
+                  "{:.2f}-{:.2f}; the tyre's own file, where given, reads them at its own)",
+                  pub.kx_over_peak_low, pub.kx_over_peak_high, pub.peak_exponent_low,
+                  pub.peak_exponent_high);
+    const std::string spread =
+        own ? std::string()
+            : fmt::format(
+                  ". At the ends of those tyres' laws it reads {:.4g}-{:.4g}: without the tyre's "
+                  "file the load's change is known no closer (a tyre whose laws lie outside "
+                  "them reads outside it)",
+                  band[0], band[1]);
     rep.notes.push_back(fmt::format(
         "load_transfer's magnitude, {:.4g} per m/s^2, is measured with the slip stiffness's load "
         "ratio held at {:.2f} and E moving by {:.3f} per unit of the peak's change, the load laws "
         "of {}: the runs end just past the peak and fix the stiffness's load sensitivity (q x "
         "ratio) better than q; the free fit says {:.4g} at a ratio of {:.2f}. The wheel's load "
         "changes by {:.4g} of itself per m/s^2 (dFz/Fz: the peak's change over d ln D / d ln Fz, "
-        "{:.3f}){}",
+        "{:.3f}){}{}",
         q, laws.kx_over_peak, laws.e_per_peak_scale, whose, q_free, ratio, load_per_decel,
-        laws.peak_exponent, h_over_l));
+        laws.peak_exponent, spread, h_over_l));
     pitch_note(rep, e);
   }
 }

@@ -21,6 +21,20 @@ struct LoadLaws {
   double e_per_peak_scale = 0.0;
 };
 
+/// The spread of those published tyres' laws. Where the tyre's own file is not given, a load
+/// transfer's magnitude is also read at each end of it: how far the laws alone move it (a tyre
+/// whose laws lie outside the spread reads outside that band).
+struct PublishedLoadLawRange {
+  double peak_exponent_low = 0.87, peak_exponent_high = 0.97;
+  double kx_over_peak_low = 1.15, kx_over_peak_high = 1.33;
+};
+inline constexpr PublishedLoadLawRange kPublishedLoadLawRange{};
+static_assert(kPublishedLoadLawRange.peak_exponent_low <= LoadLaws{}.peak_exponent &&
+                  LoadLaws{}.peak_exponent <= kPublishedLoadLawRange.peak_exponent_high &&
+                  kPublishedLoadLawRange.kx_over_peak_low <= LoadLaws{}.kx_over_peak &&
+                  LoadLaws{}.kx_over_peak <= kPublishedLoadLawRange.kx_over_peak_high,
+              "the published laws held lie inside their spread");
+
 /// The tyre's load laws at wheel load fz_n (braking, the file's scalings LFZO and LEX applied).
 /// Throws InputError naming the coefficient where a law has no slope there (PDX1 + PDX2 dfz or
 /// PKX1 + PKX2 dfz not positive: the file describes no tyre at that load).

@@ -23,7 +23,10 @@ CASES = [
     ({"bench": "ground", "effect": "load_transfer", "magnitude": 0.25, "tyre": "sedan_pac02"},
      (["load_transfer", "unexplained"], {"dfz_per_decel_s2_per_m": 0.5},  # the model's own q
       [{"name": "load_transfer", "accepted": True,  # the load's change the report gives
-        "params": {"load_ratio_per_decel_s2_per_m": 0.25 * 3.4 / (2 * 9.81) * 1.1}}])),
+        "params": {"load_ratio_per_decel_s2_per_m": 0.25 * 3.4 / (2 * 9.81) * 1.1,
+                   # the band at published tyres' laws: the truth (0.25) lies inside it
+                   "load_ratio_per_decel_low_s2_per_m": 0.24 * 3.4 / (2 * 9.81),
+                   "load_ratio_per_decel_high_s2_per_m": 0.3 * 3.4 / (2 * 9.81)}}])),
     ({"bench": "ground", "effect": "speed_friction", "magnitude": 1.0},
      (["unexplained"], {})),  # a miss
     ({"bench": "ground", "effect": "none", "magnitude": 0.0}, (["none"], {})),
@@ -126,6 +129,10 @@ class CSuite(unittest.TestCase):
             self.assertIn("bench/gap_c_suite.py", text)
             self.assertTrue(text.rstrip().endswith("after"))
             self.assertIn("| load transfer's error by tyre, median (sets) | sedan_pac02 10.0 % (1) |",
+                          text)
+            self.assertEqual(doc["load_transfer_inside_published_band_by_tyre"],
+                             {"sedan_pac02": {"inside": 1, "of": 1}})
+            self.assertIn("published tyres' load laws (by tyre) | 1 of 1 (100 %); sedan_pac02 1 of 1 |",
                           text)
 
     def test_several_seeds_pool_their_suites_into_a_block_of_its_own(self):

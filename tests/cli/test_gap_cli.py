@@ -249,6 +249,16 @@ class Gap(unittest.TestCase):
                 self.assertAlmostEqual(read[given], lt["params"]["dfz_per_decel_s2_per_m"]
                                        / doc["tyre_load_laws"]["peak_load_exponent"], places=12)
             self.assertNotAlmostEqual(read[True], read[False], places=3)
+            # At published tyres' laws it is read at the ends of their spread too; at the tyre's
+            # own, not.
+            band = {}
+            for given, doc in docs.items():
+                lt = next(x for x in doc["effects"] if x["accepted"] and x["name"] == "load_transfer")
+                band[given] = [lt["params"].get(f"load_ratio_per_decel_{k}_s2_per_m")
+                               for k in ("low", "high")]
+            self.assertEqual(band[True], [None, None])
+            self.assertLess(band[False][0], read[False])
+            self.assertGreater(band[False][1], read[False])
             # A car declared from its geometry is held at the file's laws too.
             model = os.path.join(tmp, "ground.toml")
             r = run("gap", "--bench-model", model, "--vehicle-mass", "1300", "--cg-height", "0.55",

@@ -67,13 +67,21 @@ TEST(GapReferee, LoadTransferIsGivenAsHOverLWhereTheMassIsKnown) {
   const gap::Report rep = gap::diagnose(runs, sim::pooled_start(runs), o);
   ASSERT_FALSE(rep.verdict.empty());
   ASSERT_EQ(rep.verdict.front(), "load_transfer");
-  double h_over_l = NAN;
+  double h_over_l = NAN, low = NAN, high = NAN;
   for (const auto& e : rep.effects)
     if (e.accepted && e.effect == gap::Effect::LoadTransfer)
-      for (const auto& [name, v] : e.params)
+      for (const auto& [name, v] : e.params) {
         if (name == "cg_height_over_wheelbase") h_over_l = v;
+        if (name == "cg_height_over_wheelbase_low") low = v;
+        if (name == "cg_height_over_wheelbase_high") high = v;
+      }
   const double truth = s.cg_height_m / s.wheelbase_m;
   EXPECT_NEAR(h_over_l, truth, 0.15 * truth);
+  // Read at the ends of the published tyres' laws too: A's tyre lies inside their spread.
+  EXPECT_LT(low, h_over_l);
+  EXPECT_GT(high, h_over_l);
+  EXPECT_LE(low, truth);
+  EXPECT_GE(high, truth);
   // Without the mass only dFz/Fz is given.
   const gap::Report no_mass =
       gap::diagnose(runs, sim::pooled_start(runs), gap::calibrated_options(gap::Condition::Ground));
@@ -90,7 +98,7 @@ TEST(GapReferee, LoadTransferIsReadAtTheTyresOwnLoadLawsWhereGiven) {
   const auto runs = sim::simulate_runs(s, 101043);
   struct Read {
     std::vector<std::string> verdict;
-    double q = NAN, load = NAN, ratio = NAN, exponent = NAN;
+    double q = NAN, load = NAN, ratio = NAN, exponent = NAN, low = NAN, high = NAN;
     std::string note;
   };
   auto diagnose = [&](const tyre::LoadLaws& laws, const std::string& source) {
@@ -107,6 +115,8 @@ TEST(GapReferee, LoadTransferIsReadAtTheTyresOwnLoadLawsWhereGiven) {
           if (name == "load_ratio_per_decel_s2_per_m") r.load = v;
           if (name == "kx_load_ratio_held") r.ratio = v;
           if (name == "peak_load_exponent") r.exponent = v;
+          if (name == "load_ratio_per_decel_low_s2_per_m") r.low = v;
+          if (name == "load_ratio_per_decel_high_s2_per_m") r.high = v;
         }
     for (const auto& n : rep.notes)
       if (n.find("load_transfer's magnitude") != std::string::npos) r.note = n;
@@ -131,6 +141,17 @@ TEST(GapReferee, LoadTransferIsReadAtTheTyresOwnLoadLawsWhereGiven) {
   EXPECT_LT(given.q, 0.97 * published.q);
   EXPECT_NE(given.note.find("the tyre's own file, tyre.tir"), std::string::npos) << given.note;
   EXPECT_NE(published.note.find("published MF 6.1 tyres"), std::string::npos) << published.note;
+  // At published laws the magnitude is also read at each end of their spread: the band holds
+  // the published reading at both ends of d ln D / d ln Fz (0.87-0.97) and more, from the
+  // stiffness ratio's ends; the tyre's own laws have no band.
+  EXPECT_LE(published.low, published.q / 0.97 + 1e-12);
+  EXPECT_GE(published.high, published.q / 0.87 - 1e-12);
+  EXPECT_LT(published.high, 2 * published.low);
+  EXPECT_NE(published.note.find("At the ends of those tyres' laws it reads"), std::string::npos)
+      << published.note;
+  EXPECT_TRUE(std::isnan(given.low));
+  EXPECT_TRUE(std::isnan(given.high));
+  EXPECT_EQ(given.note.find("At the ends of those tyres' laws"), std::string::npos) << given.note;
 }
 
 TEST(GapReferee, WithTheTyresFileEachTrialIsGivenItsTyresLoadLaws) {
