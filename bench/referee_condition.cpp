@@ -120,6 +120,8 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
   std::map<std::string, std::vector<double>> mag_err, mag_err_named, after_by_effect;
   std::vector<double> after_over_noise;
   std::vector<double> load_ratio_err;  // load transfer as dFz/Fz per m/s^2, where named
+  // Of those read at published tyres' laws, the truths inside the band their ends give.
+  int load_band_inside = 0, load_band_of = 0;
   std::map<std::string, std::pair<int, int>> by_vehicle;  // right (named or none), all
   int correct_effects = 0, exact_effects = 0, n_effects = 0, n_none = 0, fp_none = 0,
       none_exact = 0, refused = 0;
@@ -184,6 +186,12 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
     if (r.correct()) after_over_noise.push_back(ratio);
     if (std::isfinite(r.load_per_decel_estimate) && std::isfinite(inj.load_per_decel))
       load_ratio_err.push_back(std::abs(r.load_per_decel_estimate / inj.load_per_decel - 1));
+    if (std::isfinite(r.load_per_decel_low) && std::isfinite(r.load_per_decel_high) &&
+        std::isfinite(inj.load_per_decel)) {
+      ++load_band_of;
+      load_band_inside +=
+          r.load_per_decel_low <= inj.load_per_decel && inj.load_per_decel <= r.load_per_decel_high;
+    }
     after_by_effect[inj.effect].push_back(ratio);
   }
   std::vector<std::string> said_cols = labels;
@@ -257,6 +265,12 @@ nlohmann::ordered_json run_condition(gap::Condition c, const Settings& st, sim::
         "trials)\n",
         100 * quantile(load_ratio_err, 0.5), 100 * quantile(load_ratio_err, 0.9),
         load_ratio_err.size());
+  }
+  if (load_band_of > 0) {
+    j["load_ratio_inside_published_band"] = {{"inside", load_band_inside}, {"of", load_band_of}};
+    std::cout << fmt::format(
+        "load transfer's truth inside the band at the ends of published tyres' laws: {} of {}\n",
+        load_band_inside, load_band_of);
   }
   for (const auto& [e, m] : missed) {
     j["missed"][e] = {

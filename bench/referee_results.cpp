@@ -210,6 +210,11 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
       each += fmt::format("; load transfer as dFz/Fz per m/s^2 {} ({})",
                           percent(num(r["load_ratio_error_named"], "median")),
                           percent(num(r["load_ratio_error_named"], "p90")));
+    if (r.contains("load_ratio_inside_published_band")) {
+      const auto& band = r["load_ratio_inside_published_band"];
+      each += fmt::format(", the truth inside the band of published tyres' laws in {} of {}",
+                          band.value("inside", 0), band.value("of", 0));
+    }
     out += list_item(r, each);
   }
   // Each row's misses: how many lay below the smallest magnitude their runs could show.

@@ -179,8 +179,11 @@ TrialResult score(const Injection& inj, const gap::Report& rep) {
   t.estimate2 = NAN;
   for (const auto& e : rep.effects)
     if (e.accepted && e.effect == gap::Effect::LoadTransfer)
-      for (const auto& [name, value] : e.params)
+      for (const auto& [name, value] : e.params) {
         if (name == "load_ratio_per_decel_s2_per_m") t.load_per_decel_estimate = value;
+        if (name == "load_ratio_per_decel_low_s2_per_m") t.load_per_decel_low = value;
+        if (name == "load_ratio_per_decel_high_s2_per_m") t.load_per_decel_high = value;
+      }
   // The accepted score's when it was named (forward selection appends it after round 1's).
   const auto estimate = [&](const std::string& effect, double& out) {
     bool accepted = false;

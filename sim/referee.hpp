@@ -114,6 +114,9 @@ struct TrialResult {
   double estimate2 = 0.0;  ///< a pair's second effect's, as estimate
   /// Load transfer's dFz/Fz per m/s^2 where it was named (NaN: not named).
   double load_per_decel_estimate = NAN;
+  /// Its band at the ends of published tyres' load laws (NaN: not named, or read at the tyre's
+  /// own laws).
+  double load_per_decel_low = NAN, load_per_decel_high = NAN;
   double gap_before_n = 0.0, gap_after_n = 0.0, noise_n = 0.0;
   /// Where the injected effect was not named: the smallest magnitude its runs could have shown
   /// beside the effects named, in its parameter's unit (NaN: named, or no reach for it; for a

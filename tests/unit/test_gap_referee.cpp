@@ -180,6 +180,14 @@ TEST(GapReferee, WithTheTyresFileEachTrialIsGivenItsTyresLoadLaws) {
   EXPECT_LT(std::abs(own.load_per_decel_estimate / truth - 1),
             std::abs(published.load_per_decel_estimate / truth - 1));
   EXPECT_NEAR(own.load_per_decel_estimate, truth, 0.05 * truth);
+  // The trial keeps the band the report gives at published laws (none at the tyre's own): it
+  // holds the published reading, and here A's tyre, whose laws lie inside the spread.
+  EXPECT_TRUE(std::isnan(own.load_per_decel_low));
+  EXPECT_TRUE(std::isnan(own.load_per_decel_high));
+  EXPECT_LT(published.load_per_decel_low, published.load_per_decel_estimate);
+  EXPECT_GT(published.load_per_decel_high, published.load_per_decel_estimate);
+  EXPECT_LE(published.load_per_decel_low, truth);
+  EXPECT_GE(published.load_per_decel_high, truth);
 }
 
 TEST(GapReferee, RollerVsRoadNamesTheTransferEffect) {
