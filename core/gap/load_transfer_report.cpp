@@ -127,9 +127,9 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
     const std::string spread =
         own ? std::string()
             : fmt::format(
-                  ". At the ends of those tyres' laws it reads {:.4g}-{:.4g}: without the tyre's "
-                  "file the load's change is known no closer (a tyre whose laws lie outside "
-                  "them reads outside it)",
+                  ". At the ends of those tyres' laws it reads {:.4g}-{:.4g}: the spread their "
+                  "laws alone leave, before the runs' own noise (a tyre whose laws lie outside "
+                  "them reads outside it; its file, --tir, removes the spread)",
                   band[0], band[1]);
     rep.notes.push_back(fmt::format(
         "load_transfer's magnitude, {:.4g} per m/s^2, is measured with the slip stiffness's load "
