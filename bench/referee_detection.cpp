@@ -42,7 +42,6 @@ nlohmann::ordered_json run_detection(gap::Condition c, sim::Generator g, const g
   std::vector<std::string> effects;
   std::uint64_t set = 0;
   for (const auto& e : sim::referee_effects(c, g)) {
-    if (g == sim::Generator::B && e == "load_transfer") continue;
     const bool kept =
         st.only.empty() || std::find(st.only.begin(), st.only.end(), e) != st.only.end();
     if (kept) effects.push_back(e);
@@ -63,6 +62,7 @@ nlohmann::ordered_json run_detection(gap::Condition c, sim::Generator g, const g
         inj.magnitude = cell.magnitude;
         inj.condition = c;
         inj.generator = g;
+        inj.load_given = true;  // generator B's vehicle would otherwise set its own
         return sim::run_trial(
             inj, st.seed0 * 1000 + 900'000 + cell.set + 100'000 * static_cast<std::uint64_t>(c),
             gates);

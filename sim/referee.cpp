@@ -246,7 +246,7 @@ void set_generator_b_export_hz(double hz) {
 std::vector<gap::Run> generator_b_runs(Injection& inj, std::uint64_t seed, double sample_hz) {
   const auto bench =
       inj.condition == gap::Condition::Ground ? can::BenchKind::Ground : can::BenchKind::Roller;
-  std::vector<sim2::EffectDraw> effects{{inj.effect, inj.magnitude}};
+  std::vector<sim2::EffectDraw> effects{{inj.effect, inj.magnitude, inj.load_given}};
   if (inj.pair()) effects.push_back({inj.effect2, inj.magnitude2});
   sim2::SetDraw set = sim2::draw_set(bench, effects, seed, g_stations);
   inj.station = set.station;

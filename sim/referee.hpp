@@ -47,6 +47,8 @@ struct Injection {
   /// where the runs are made: the diagnosis is given them where the tyre's file is taken as known
   /// (set_tyre_file_known).
   tyre::LoadLaws tyre_laws = {};
+  /// Generator B's load transfer at this magnitude (a detection curve's), not its vehicle's own.
+  bool load_given = false;
   /// What generator B drew for the set (vehicle, runs, export rate, speeds); empty for A and C.
   std::string station = {};
   /// The load transfer injected (first or second), its magnitude in the diagnosis's unit; NaN:

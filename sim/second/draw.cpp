@@ -99,7 +99,7 @@ void check_effect(const std::string& effect, double magnitude) {
 
 SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, std::uint64_t seed,
                  Stations stations) {
-  for (const auto& [effect, magnitude] : effects) check_effect(effect, magnitude);
+  for (const auto& d : effects) check_effect(d.effect, d.magnitude);
   Rng rng(seed * 7919 + 17);
   // The wider station draws take their own stream: a Cars set of a seed stays what it was.
   Rng srng(seed * 104729 + 5);
@@ -176,7 +176,7 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
   base.other_brakes_ratio = 1.0 + 2.0 * rng.uniform(0.3, 0.6);  // the other front + two rears
   base.other_mu = rng.uniform(0.9, 1.1);
   SetDraw out;
-  for (const auto& [effect, magnitude] : effects) {
+  for (const auto& [effect, magnitude, load_given] : effects) {
     double truth = magnitude;
     if (effect == "relaxation_length") base.relaxation_m = magnitude;
     if (effect == "wheel_inertia") base.inertia_kgm2 = truth = magnitude * inertia_scale;
@@ -188,8 +188,9 @@ SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, s
     if (effect == "friction_fade") base.fade_per_m = magnitude;
     if (effect == "load_transfer") {
       // dFz / Fz per m/s^2 = m h / (2 L Fz0) = h/L / (front share g); D follows through MF 6.1.
-      base.load_per_decel = h_over_l / (front_share * kG);
-      truth = base.load_per_decel * d_ln_d_per_ln_fz(base.tyre, base.fz_n, base.pressure_pa);
+      const double d_ln_d = d_ln_d_per_ln_fz(base.tyre, base.fz_n, base.pressure_pa);
+      base.load_per_decel = load_given ? magnitude / d_ln_d : h_over_l / (front_share * kG);
+      truth = base.load_per_decel * d_ln_d;
     }
     if (effect == "misspecified") {
       base.brush = true;

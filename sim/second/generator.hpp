@@ -102,6 +102,10 @@ SetDraw draw_set(can::BenchKind bench, const std::string& effect, double magnitu
 struct EffectDraw {
   std::string effect;
   double magnitude = 0;
+  /// Load transfer only: by default the vehicle drawn for the set (its h/L) sets it and the
+  /// magnitude is not read; given, the magnitude is the peak's scale per m/s^2 of deceleration
+  /// (dFz/Fz per m/s^2 times the tyre's d ln D / d ln Fz), as a detection curve asks for.
+  bool load_given = false;
 };
 SetDraw draw_set(can::BenchKind bench, const std::vector<EffectDraw>& effects, std::uint64_t seed,
                  Stations stations = Stations::Cars);

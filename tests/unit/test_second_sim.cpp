@@ -124,6 +124,22 @@ TEST(SecondSim, AnEffectItCannotInjectIsAnErrorNamingIt) {
   EXPECT_EQ(message("slip_offset", -0.004), "");
 }
 
+TEST(SecondSim, ALoadTransferIsTheVehiclesUnlessItsMagnitudeIsGiven) {
+  // By default the vehicle drawn for the set (its h/L) sets the load transfer and the magnitude
+  // asked for is not read; given (a detection curve's), the peak moves by the magnitude per m/s^2.
+  const auto own = sim2::draw_set(can::BenchKind::Ground, {{"load_transfer", 0.01}}, 5);
+  const auto other = sim2::draw_set(can::BenchKind::Ground, {{"load_transfer", 0.04}}, 5);
+  EXPECT_EQ(own.magnitudes.front(), other.magnitudes.front());
+  EXPECT_GT(own.runs.front().load_per_decel, 0.0);
+  for (const double m : {0.005, 0.04}) {
+    const auto given = sim2::draw_set(can::BenchKind::Ground, {{"load_transfer", m, true}}, 5);
+    EXPECT_DOUBLE_EQ(given.magnitudes.front(), m);
+    // The same tyre and vehicle, its load's change scaled to give that peak scale.
+    EXPECT_NEAR(given.runs.front().load_per_decel / own.runs.front().load_per_decel,
+                m / own.magnitudes.front(), 1e-12);
+  }
+}
+
 TEST(SecondSim, ItsExportIsReadAsTheEventsItHolds) {
   for (auto bench : {can::BenchKind::Roller, can::BenchKind::Ground}) {
     const auto set = sim2::draw_set(bench, "none", 0.0, 3);
