@@ -70,7 +70,9 @@ nlohmann::ordered_json run_detection(gap::Condition c, sim::Generator g, const g
       cname + " detection");
   nlohmann::ordered_json j;
   std::cout << fmt::format(
-      "\ndetection ({} sets per magnitude; named: the effect in the verdict)\n", st.sets);
+      "\ndetection ({} sets per magnitude; named: the effect first in the verdict, or a note "
+      "that it cannot be told from the name first)\n",
+      st.sets);
   std::size_t i = 0;
   for (const auto& e : effects) {
     std::string line = fmt::format("  {}:", e);
