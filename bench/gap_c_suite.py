@@ -82,27 +82,29 @@ def named_first(case, verdict):
     return verdict[0] == e or (case["bench"] == "roller" and e in LAGS and verdict[0] in LAGS)
 
 
+def load_params(doc):
+    """The accepted load transfer's parameters as the report gives them ({} where not named)."""
+    for e in doc.get("effects") or []:
+        if e.get("accepted") and e.get("name") == "load_transfer":
+            return e.get("params") or {}
+    return {}
+
+
 def load_ratio(doc):
     """Load transfer's magnitude as the report gives it: the wheel load's relative change per m/s^2
     (dFz/Fz), read with published tyres' load laws (the accepted effect's load ratio; the model's
     own dfz_per_decel_s2_per_m scales the peak at the stiffness ratio fitted free)."""
-    for e in doc.get("effects") or []:
-        if e.get("accepted") and e.get("name") == "load_transfer":
-            return (e.get("params") or {}).get("load_ratio_per_decel_s2_per_m")
-    return None
+    return load_params(doc).get("load_ratio_per_decel_s2_per_m")
 
 
 def load_band(doc):
     """The load's change read at the ends of published tyres' load laws, in h/L (low, high), or
     None where the report gives no band (read at the tyre's own file, or not named)."""
-    for e in doc.get("effects") or []:
-        if e.get("accepted") and e.get("name") == "load_transfer":
-            p = e.get("params") or {}
-            lo, hi = (p.get(f"load_ratio_per_decel_{k}_s2_per_m") for k in ("low", "high"))
-            if lo is None or hi is None:
-                return None
-            return lo * 2 * G_MPS2 / C_MASS_PER_LOAD, hi * 2 * G_MPS2 / C_MASS_PER_LOAD
-    return None
+    p = load_params(doc)
+    lo, hi = (p.get(f"load_ratio_per_decel_{k}_s2_per_m") for k in ("low", "high"))
+    if lo is None or hi is None:
+        return None
+    return lo * 2 * G_MPS2 / C_MASS_PER_LOAD, hi * 2 * G_MPS2 / C_MASS_PER_LOAD
 
 
 def estimate(case, doc):

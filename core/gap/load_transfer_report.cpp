@@ -71,9 +71,9 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
   // (the slip stiffness's ratio moves the fitted peak scale; the peak's exponent turns that into
   // the load's change).
   const bool own = !o.tyre_load_laws_source.empty();
+  const tyre::PublishedLoadLawRange& pub = tyre::kPublishedLoadLawRange;
   std::array<double, 2> band{NAN, NAN};
   if (!own) {
-    const tyre::PublishedLoadLawRange& pub = tyre::kPublishedLoadLawRange;
     band = {q / pub.peak_exponent_high, q / pub.peak_exponent_low};
     std::vector<Run> at = runs;
     for (const double ratio : {pub.kx_over_peak_low, pub.kx_over_peak_high}) {
@@ -115,7 +115,6 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
               : fmt::format(", {:.3f}-{:.3f} at the ends of the published laws", per_load * band[0],
                             per_load * band[1]));
     }
-    const tyre::PublishedLoadLawRange& pub = tyre::kPublishedLoadLawRange;
     const std::string whose =
         own ? fmt::format("the tyre's own file, {}, at the runs' wheel load",
                           o.tyre_load_laws_source)
