@@ -119,8 +119,9 @@ void measure_load_transfer(Report& rep, const std::vector<Run>& runs, const Fitt
         own ? fmt::format("the tyre's own file, {}, at the runs' wheel load",
                           o.tyre_load_laws_source)
             : fmt::format(
-                  "published MF 6.1 tyres (their ratios {:.2f}-{:.2f}, d ln D / d ln Fz "
-                  "{:.2f}-{:.2f}; the tyre's own file, where given, reads them at its own)",
+                  "car and van MF 6.1 tyres of published ranges (their ratios {:.2f}-{:.2f}, "
+                  "d ln D / d ln Fz {:.2f}-{:.2f}; the tyre's own file, where given, reads them "
+                  "at its own)",
                   pub.kx_over_peak_low, pub.kx_over_peak_high, pub.peak_exponent_low,
                   pub.peak_exponent_high);
     const std::string spread =

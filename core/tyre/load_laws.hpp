@@ -7,9 +7,10 @@ namespace brakefit::tyre {
 
 struct Mf61Tyre;  // core/tyre/mf61.hpp
 
-/// The load laws at one wheel load. The defaults are published car and van tyres' at their
-/// nominal loads (the four .tir files sim/second reads: d ln D / d ln Fz 0.87-0.97, d ln Kx /
-/// d ln D 1.15-1.33), which the diagnosis holds where the tyre's own file is not given.
+/// The load laws at one wheel load. The defaults are car and van tyres' at their nominal loads
+/// (the four .tir files sim/second reads, TNO's published 205/60R15 and three composed in
+/// published ranges: d ln D / d ln Fz 0.87-0.97, d ln Kx / d ln D 1.15-1.33), which the
+/// diagnosis holds where the tyre's own file is not given.
 struct LoadLaws {
   /// d ln D / d ln Fz: MF 6.1's D = (PDX1 + PDX2 dfz) Fz gives 1 + PDX2 (Fz/Fz0) / (PDX1 + PDX2
   /// dfz).
@@ -21,9 +22,11 @@ struct LoadLaws {
   double e_per_peak_scale = 0.0;
 };
 
-/// The spread of those published tyres' laws. Where the tyre's own file is not given, a load
+/// The spread of those four tyres' laws. Where the tyre's own file is not given, a load
 /// transfer's magnitude is also read at each end of it: how far the laws alone move it (a tyre
-/// whose laws lie outside the spread reads outside that band).
+/// whose laws lie outside the spread reads outside that band). Published files of other tyres
+/// spread wider: at their nominal loads d ln Kx / d ln D is 1.43 for MSC's 235/60R16 car tyre,
+/// 0.93 for a 335/65R22.5 truck tyre and 0.73 for a 37x12.5R16.5 off-road tyre.
 struct PublishedLoadLawRange {
   double peak_exponent_low = 0.87, peak_exponent_high = 0.97;
   double kx_over_peak_low = 1.15, kx_over_peak_high = 1.33;
