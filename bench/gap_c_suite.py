@@ -13,7 +13,9 @@ user would run them. A single effect counts as named when it is the first verdic
 roller, where a set's runs share one speed, a lag and a delay count as one); a null set when the
 verdict is exactly ["none"]; a misspecified set when its first verdict is `none` or
 `unexplained`. A false claim is a catalogue name first on a set without an effect (nulls and
-misspecified). The magnitude error is the joint model's estimate (parameters_after) against the
+misspecified). Of the single effects named, the table also counts those named alone: no other
+catalogue name beside them (on the roller the lag's twin aside; `unexplained` is not a name), and
+lists the others as extra names. The magnitude error is the joint model's estimate (parameters_after) against the
 truth where the effect is named; load transfer's is the wheel load's change the report gives
 (dFz/Fz per m/s^2, the accepted effect's load_ratio_per_decel_s2_per_m) in C's law's unit, h/L
 (C's vehicle weighs 3.4 Fz0/g, so dFz/Fz per m/s^2 is 3.4 h/L / (2 g)). Without the tyre's
@@ -75,6 +77,13 @@ def diagnose(brakefit, set_dir, case, tir_dir=None):
         return {"verdict": ["refused"], "error": p.stderr.strip().splitlines()[-1:]}
 
 
+def extra_names(case, verdict):
+    """The catalogue names a verdict gives beside the set's effect (on the roller, where a lag and
+    a delay count as one, beside either)."""
+    own = set(LAGS) if case["bench"] == "roller" and case["effect"] in LAGS else {case["effect"]}
+    return [v for v in verdict if v not in own and v not in ("none", "unexplained")]
+
+
 def named_first(case, verdict):
     e = case["effect"]
     if not verdict:
@@ -123,9 +132,9 @@ def estimate(case, doc):
 
 
 def score(truth, docs):
-    rows = {"single": [0, 0], "load_transfer": [0, 0], "null": [0, 0], "misspec": [0, 0],
-            "false_claims": [0, 0]}
-    errors, misses, named = {}, [], []
+    rows = {"single": [0, 0], "alone": [0, 0], "load_transfer": [0, 0], "null": [0, 0],
+            "misspec": [0, 0], "false_claims": [0, 0]}
+    errors, misses, named, extras = {}, [], [], []
     per_effect, load_by_tyre, band_by_tyre = {}, {}, {}
     for case, doc in zip(truth, docs):
         e, v = case["effect"], doc.get("verdict", [])
@@ -141,6 +150,13 @@ def score(truth, docs):
             ok = named_first(case, v)
             rows["single"][0] += ok
             rows["single"][1] += 1
+            if ok:
+                extra = extra_names(case, v)
+                rows["alone"][0] += not extra
+                rows["alone"][1] += 1
+                if extra:
+                    extras.append(f"{case['case']} {case['bench']} {e} {case['magnitude']:.4g} "
+                                  f"said {v}")
             key = f"{case['bench']} {e}"
             per_effect.setdefault(key, [0, 0])
             per_effect[key][0] += ok
@@ -166,7 +182,7 @@ def score(truth, docs):
             rows["false_claims"][0] += bool(v) and v[0] not in ("none", "unexplained", "refused")
         if not ok:
             misses.append(f"{case['case']} {case['bench']} {e} {case['magnitude']:.4g} said {v}")
-    return rows, per_effect, errors, misses, named, load_by_tyre, band_by_tyre
+    return rows, per_effect, errors, misses, named, load_by_tyre, band_by_tyre, extras
 
 
 def pct(a, b):
@@ -177,6 +193,8 @@ def table(rows, per_effect, errors, load_by_tyre, band_by_tyre):
     out = ["| sets | result |", "|---|---|"]
     out.append(f"| single effects named first (lag and delay at one roller speed as one) | "
                f"{pct(*rows['single'])} |")
+    out.append(f"| of them named alone (no other catalogue name beside them; on the roller the "
+               f"lag's twin aside) | {pct(*rows['alone'])} |")
     for key in sorted(per_effect):
         out.append(f"| {key} | {per_effect[key][0]} of {per_effect[key][1]} |")
     out.append(f"| null sets `[\"none\"]` | {pct(*rows['null'])} |")
@@ -261,7 +279,7 @@ def main():
                 c["case"] = c["case"] if len(seeds) == 1 else f"seed{seed}/{c['case']}"
             truth += cases
             docs += found
-    rows, per_effect, errors, misses, named, load_by_tyre, band_by_tyre = score(truth, docs)
+    rows, per_effect, errors, misses, named, load_by_tyre, band_by_tyre, extras = score(truth, docs)
     minutes = (time.time() - start) / 60
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
@@ -272,6 +290,7 @@ def main():
     text = head + "\n\n" + table(rows, per_effect, errors, load_by_tyre, band_by_tyre)
     print(text)
     print("\nmisses:\n" + "\n".join(misses or ["none"]))
+    print("\nnamed with extra names:\n" + "\n".join(extras or ["none"]))
     print("\nestimates where named:\n" + "\n".join(named))
     print(json.dumps({"schema": "brakefit.gap_c_suite/1", "version": "0.1.0", "commit": commit,
                       "seeds": seeds, "sets": len(truth),
@@ -282,7 +301,7 @@ def main():
                           {t: statistics.median(v) for t, v in load_by_tyre.items()},
                       "load_transfer_inside_published_band_by_tyre":
                           {t: {"inside": c[0], "of": c[1]} for t, c in band_by_tyre.items()},
-                      "misses": misses}))
+                      "misses": misses, "extra_names": extras}))
     if a.results:
         write_results(a.results, text, a.results_key)
         log(f"wrote the table into {a.results}")

@@ -17,7 +17,8 @@ SCRIPT = os.path.join(ROOT, "bench", "gap_c_suite.py")
 # Each case: its truth, and the stand-in's answer (verdict, parameters_after[, effects]).
 CASES = [
     ({"bench": "roller", "effect": "time_offset", "magnitude": 0.05},
-     (["relaxation_length"], {"sigma_m": 0.07})),  # a lag for a delay at one roller speed: named
+     (["relaxation_length", "time_offset"], {"sigma_m": 0.07})),  # a lag for a delay at one
+    # roller speed: named, the delay beside it no extra name
     ({"bench": "roller", "effect": "slip_offset", "magnitude": 0.01},
      (["slip_offset"], {"slip_offset_ratio": -0.0102})),  # C's offset reads as the negative
     ({"bench": "ground", "effect": "load_transfer", "magnitude": 0.25, "tyre": "sedan_pac02"},
@@ -32,6 +33,8 @@ CASES = [
     ({"bench": "ground", "effect": "none", "magnitude": 0.0}, (["none"], {})),
     ({"bench": "ground", "effect": "none", "magnitude": 0.0}, (["relaxation_length"], {})),
     ({"bench": "roller", "effect": "misspec", "magnitude": 0.0}, (["unexplained"], {})),
+    ({"bench": "ground", "effect": "slip_offset", "magnitude": 0.01},  # named, with an extra name
+     (["slip_offset", "brake_threshold", "unexplained"], {"slip_offset_ratio": -0.0098})),
 ]
 
 STAND_IN = """#!{python}
@@ -111,7 +114,11 @@ class CSuite(unittest.TestCase):
             doc = json.loads(p.stdout.strip().splitlines()[-1])
             self.assertEqual(doc["schema"], "brakefit.gap_c_suite/1")
             counts = doc["counts"]
-            self.assertEqual((counts["single"]["ok"], counts["single"]["of"]), (3, 4))
+            self.assertEqual((counts["single"]["ok"], counts["single"]["of"]), (4, 5))
+            self.assertEqual((counts["alone"]["ok"], counts["alone"]["of"]), (3, 4))
+            self.assertEqual(doc["extra_names"], [
+                "case007 ground slip_offset 0.01 said ['slip_offset', 'brake_threshold', "
+                "'unexplained']"])
             self.assertEqual((counts["null"]["ok"], counts["null"]["of"]), (1, 2))
             self.assertEqual((counts["misspec"]["ok"], counts["misspec"]["of"]), (1, 1))
             self.assertEqual((counts["false_claims"]["ok"], counts["false_claims"]["of"]), (1, 3))
@@ -125,7 +132,8 @@ class CSuite(unittest.TestCase):
             with open(results) as f:
                 text = f.read()
             self.assertNotIn("\nold\n", text)
-            self.assertIn("3 of 4 (75 %)", text)
+            self.assertIn("4 of 5 (80 %)", text)
+            self.assertIn("roller the lag's twin aside) | 3 of 4 (75 %) |", text)
             self.assertIn("bench/gap_c_suite.py", text)
             self.assertTrue(text.rstrip().endswith("after"))
             self.assertIn("| load transfer's error by tyre, median (sets) | sedan_pac02 10.0 % (1) |",
@@ -148,7 +156,7 @@ class CSuite(unittest.TestCase):
             doc = json.loads(p.stdout.strip().splitlines()[-1])
             self.assertEqual(doc["seeds"], [5, 11])
             self.assertEqual(doc["sets"], 2 * len(CASES))
-            self.assertEqual((doc["counts"]["single"]["ok"], doc["counts"]["single"]["of"]), (6, 8))
+            self.assertEqual((doc["counts"]["single"]["ok"], doc["counts"]["single"]["of"]), (8, 10))
             self.assertEqual(sorted(m.split()[0] for m in doc["misses"]),
                              ["seed11/case003", "seed11/case005", "seed5/case003", "seed5/case005"])
             with open(results) as f:
@@ -156,7 +164,7 @@ class CSuite(unittest.TestCase):
             self.assertIn("<!-- gap_c_suite begin -->\nseed 77\n<!-- gap_c_suite end -->", text)
             self.assertIn("<!-- gap_c_suite more seeds begin -->", text)
             self.assertIn("sets of generator C, seeds 5, 11", text)
-            self.assertIn("6 of 8 (75 %)", text)
+            self.assertIn("8 of 10 (80 %)", text)
 
     def test_with_tir_each_set_gets_its_tyres_file_from_generator_cs_table(self):
         with tempfile.TemporaryDirectory() as tmp:
