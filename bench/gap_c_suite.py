@@ -15,17 +15,18 @@ verdict is exactly ["none"]; a misspecified set when its first verdict is `none`
 `unexplained`. A false claim is a catalogue name first on a set without an effect (nulls and
 misspecified). Of the single effects named, the table also counts those named alone: no other
 catalogue name beside them (on the roller the lag's twin aside; `unexplained` is not a name), and
-lists the others as extra names. The magnitude error is the joint model's estimate (parameters_after) against the
-truth where the effect is named; load transfer's is the wheel load's change the report gives
-(dFz/Fz per m/s^2, the accepted effect's load_ratio_per_decel_s2_per_m) in C's law's unit, h/L
-(C's vehicle weighs 3.4 Fz0/g, so dFz/Fz per m/s^2 is 3.4 h/L / (2 g)). Without the tyre's
-file the report also reads it at the ends of published tyres' laws: the table counts the sets
-whose truth lies inside that band.
+lists the others as extra names. The magnitude error is the joint model's estimate
+(parameters_after) against the truth where the effect is named; load transfer's is the wheel
+load's change the report gives (dFz/Fz per m/s^2, the accepted effect's
+load_ratio_per_decel_s2_per_m) in C's law's unit, h/L (C's vehicle weighs 3.4 Fz0/g, so dFz/Fz
+per m/s^2 is 3.4 h/L / (2 g)). Without the tyre's file the report also reads it at the ends of
+the held tyres' laws (docs/gap.md §3): the table counts the sets whose truth lies inside that
+band.
 
 With --tir each set is diagnosed as a researcher who knows the tyre would: `brakefit gap --tir`
 with the set's tyre's MF 6.1 file, written from generator C's own coefficients (its TYRES table,
-read from its script without running it: bench/gen_c_tyres.py); a load
-transfer is then read at that tyre's load laws instead of published tyres'.
+read from its script without running it: bench/gen_c_tyres.py); a load transfer is then read
+at that tyre's load laws instead of the held tyres'.
 
 Several seeds (--seed 5,11,23): each seed's plan is written and diagnosed, and the table pools
 their sets; load transfer's magnitude error is also given per tyre (C's three tyres have their
@@ -77,18 +78,20 @@ def diagnose(brakefit, set_dir, case, tir_dir=None):
         return {"verdict": ["refused"], "error": p.stderr.strip().splitlines()[-1:]}
 
 
+def own_names(case):
+    """The names that count as the set's effect: on the roller, where a set's runs share one
+    speed, a lag and a delay count as one."""
+    return set(LAGS) if case["bench"] == "roller" and case["effect"] in LAGS else {case["effect"]}
+
+
 def extra_names(case, verdict):
-    """The catalogue names a verdict gives beside the set's effect (on the roller, where a lag and
-    a delay count as one, beside either)."""
-    own = set(LAGS) if case["bench"] == "roller" and case["effect"] in LAGS else {case["effect"]}
+    """The catalogue names a verdict gives beside the set's effect."""
+    own = own_names(case)
     return [v for v in verdict if v not in own and v not in ("none", "unexplained")]
 
 
 def named_first(case, verdict):
-    e = case["effect"]
-    if not verdict:
-        return False
-    return verdict[0] == e or (case["bench"] == "roller" and e in LAGS and verdict[0] in LAGS)
+    return bool(verdict) and verdict[0] in own_names(case)
 
 
 def load_params(doc):
@@ -101,13 +104,13 @@ def load_params(doc):
 
 def load_ratio(doc):
     """Load transfer's magnitude as the report gives it: the wheel load's relative change per m/s^2
-    (dFz/Fz), read with published tyres' load laws (the accepted effect's load ratio; the model's
+    (dFz/Fz), read with the held tyres' load laws (the accepted effect's load ratio; the model's
     own dfz_per_decel_s2_per_m scales the peak at the stiffness ratio fitted free)."""
     return load_params(doc).get("load_ratio_per_decel_s2_per_m")
 
 
 def load_band(doc):
-    """The load's change read at the ends of published tyres' load laws, in h/L (low, high), or
+    """The load's change read at the ends of the held tyres' load laws, in h/L (low, high), or
     None where the report gives no band (read at the tyre's own file, or not named)."""
     p = load_params(doc)
     lo, hi = (p.get(f"load_ratio_per_decel_{k}_s2_per_m") for k in ("low", "high"))
