@@ -7,6 +7,7 @@
 #include "core/fit/lm.hpp"
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
+#include "core/gap/predict_cache.hpp"
 #include "core/gap/warm_fit.hpp"
 
 namespace brakefit::gap {
@@ -47,7 +48,7 @@ class GapProblem final : public fit::LeastSquaresProblem {
     p.insert(p.end(), x.data(), x.data() + x.size());
     Eigen::Index o = 0;
     for (const Run* r : runs_) {
-      const auto f = predict(*r, p, effects_);
+      const auto f = predict(*r, p, effects_, &cache_);
       for (std::size_t i = 0; i < f.size(); ++i)
         if (r->fitted_at(i)) res(o++) = f[i] - r->force_n[i];
     }
@@ -56,6 +57,7 @@ class GapProblem final : public fit::LeastSquaresProblem {
   const std::vector<Effect>& effects_;
   std::vector<double> base_;
   Eigen::Index n_ = 0;
+  mutable PredictCache cache_;  // the fit's evaluations ask the same pitch, relaxation, filter
 };
 
 }  // namespace

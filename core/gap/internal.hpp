@@ -83,6 +83,21 @@ std::vector<double> read_earlier(const std::vector<double>& t_s, const std::vect
 /// The transient slip k' of sigma dk'/dx = k - k' along the run's rolled distance, exact for k
 /// linear between its points, from y0 (clamped between 0 and k's first value).
 std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0);
+/// relax's steps along r at sigma_m: each step's rolled distance over sigma_m, h, then exp(-h)
+/// (1 where the wheel stands), 2 n values; and relax over them.
+std::vector<double> relax_steps(const Run& r, double sigma_m);
+std::vector<double> relax(const std::vector<double>& k, const std::vector<double>& steps,
+                          double y0);
+/// filter_first_order's decays exp(-dt_i / tau_s) (0 at the first point), and the filter over
+/// them.
+std::vector<double> filter_decays(const std::vector<double>& t_s, double tau_s);
+void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, double tau_s,
+                        double y0, const std::vector<double>& decays);
+class PredictCache;
+/// predict(), with what depends on the run and one or two parameters alone kept in `cache`
+/// across a fit's evaluations (nullptr: computed each time).
+std::vector<double> predict(const Run& r, const std::vector<double>& params,
+                            const std::vector<Effect>& effects, PredictCache* cache);
 /// The reference's deceleration as the wheel's load follows it through the body's pitch:
 /// mode_s2 x'' + lag_s x' + x = a, a damped pitch mode of 1 / (2 pi sqrt(mode_s2)) Hz, or with
 /// mode_s2 = 0 a first-order lag of lag_s (implicit, stable at any step; both ~ 0: the

@@ -4,9 +4,11 @@
 // the declared pressure filter).
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
+#include "core/gap/predict_cache.hpp"
 #include "core/vecmath.hpp"
 
 namespace brakefit::gap {
@@ -93,22 +95,36 @@ std::vector<double> centred_mean(const std::vector<double>& t_s, const std::vect
 /// sigma dk'/dx = k - k' along the rolled distance x, solved exactly for slip linear between
 /// samples (the runs are decimated: an Euler step of 10-25 ms against a time constant sigma/V of
 /// 40-300 ms would misplace the lag). y0: the transient slip at the first sample.
-std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0) {
-  const std::size_t n = k.size();
-  std::vector<double> y(n), h(n, 0.0), decay(n, 0.0);
-  y[0] = std::clamp(y0, std::min(k[0], 0.0), std::max(k[0], 0.0));
+std::vector<double> relax_steps(const Run& r, double sigma_m) {
+  const std::size_t n = r.t_s.size();
+  std::vector<double> steps(2 * n, 0.0);  // h, then exp(-h) (1 where the wheel stands)
+  double* h = steps.data();
+  double* decay = steps.data() + n;
   for (std::size_t i = 1; i < n; ++i) {
     h[i] = (r.t_s[i] - r.t_s[i - 1]) * 0.5 * (r.v_ref_mps[i] + r.v_ref_mps[i - 1]) / sigma_m;
     decay[i] = -h[i];
   }
-  exp_in_place(decay);
+  std::vector<double> d(decay, decay + n);
+  exp_in_place(d);
+  for (std::size_t i = 1; i < n; ++i) decay[i] = h[i] < 1e-9 ? 1.0 : d[i];
+  return steps;
+}
+
+std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0) {
+  return relax(k, relax_steps(r, sigma_m), y0);
+}
+
+std::vector<double> relax(const std::vector<double>& k, const std::vector<double>& steps,
+                          double y0) {
+  const std::size_t n = k.size();
+  const double* h = steps.data();
+  const double* decay = steps.data() + n;
+  std::vector<double> y(n);
+  y[0] = std::clamp(y0, std::min(k[0], 0.0), std::max(k[0], 0.0));
   // y_i = c_i + a_i y_(i-1): the constants first (vectorised), then one multiply-add a step.
   std::vector<double> c(n, 0.0);
   for (std::size_t i = 1; i < n; ++i) {
-    if (h[i] < 1e-9) {
-      decay[i] = 1.0;
-      continue;
-    }
+    if (h[i] < 1e-9) continue;
     const double slope = (k[i] - k[i - 1]) / h[i];
     c[i] = k[i] - slope + (slope - k[i - 1]) * decay[i];
   }
@@ -137,16 +153,26 @@ std::vector<double> read_earlier(const std::vector<double>& t_s, const std::vect
   return out;
 }
 
+std::vector<double> filter_decays(const std::vector<double>& t_s, double tau_s) {
+  std::vector<double> a(t_s.size(), 0.0);
+  for (std::size_t i = 1; i < a.size(); ++i) a[i] = -std::max(t_s[i] - t_s[i - 1], 1e-9) / tau_s;
+  exp_in_place(a);
+  return a;
+}
+
 void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, double tau_s,
                         double y0) {
+  filter_first_order(t_s, f, tau_s, y0, filter_decays(t_s, tau_s));
+}
+
+void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, double tau_s,
+                        double y0, const std::vector<double>& a) {
   // Exact for an input linear between the points: y' = (u - y) / tau over a step dt with u
   // rising at k = (f1 - f0) / dt gives y1 = f1 - tau k + (y0 - f0 + tau k) exp(-dt / tau).
   if (f.empty()) return;
   // As y_i = c_i + a_i y_(i-1): the constants first (vectorised), then one multiply-add a step.
   const std::size_t n = f.size();
-  std::vector<double> a(n, 0.0), c(n, 0.0);
-  for (std::size_t i = 1; i < n; ++i) a[i] = -std::max(t_s[i] - t_s[i - 1], 1e-9) / tau_s;
-  exp_in_place(a);
+  std::vector<double> c(n, 0.0);
   for (std::size_t i = 1; i < n; ++i) {
     const double dt = std::max(t_s[i] - t_s[i - 1], 1e-9);
     const double tau_k = tau_s * (f[i] - f[i - 1]) / dt;
@@ -156,6 +182,20 @@ void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, 
   for (std::size_t i = 1; i < n; ++i) f[i] = c[i] + a[i] * f[i - 1];
 }
 
+namespace {
+
+/// The values `make` computes for run r at (a, b): kept in the fit's cache where it has one,
+/// else computed into `own`.
+const std::vector<double>& kept(PredictCache* cache, const Run& r, PredictCache::Kind kind,
+                                double a, double b, std::vector<double>& own,
+                                const std::function<std::vector<double>()>& make) {
+  if (cache) return cache->get(r, kind, a, b, make);
+  own = make();
+  return own;
+}
+
+}  // namespace
+
 // GCC 12 at -O3 reports a bogus -Wfree-nonheap-object on the inlined vector destructors of this
 // function (GCC bug 108088-like false positive; ASan finds nothing).
 #if defined(__GNUC__) && !defined(__clang__)
@@ -164,6 +204,11 @@ void filter_first_order(const std::vector<double>& t_s, std::vector<double>& f, 
 #endif
 std::vector<double> predict(const Run& r, const std::vector<double>& p,
                             const std::vector<Effect>& effects) {
+  return predict(r, p, effects, nullptr);
+}
+
+std::vector<double> predict(const Run& r, const std::vector<double>& p,
+                            const std::vector<Effect>& effects, PredictCache* cache) {
   const std::size_t n = r.t_s.size();
   // d_scale scales D (the peak); b_scale scales B. Friction (speed friction, the other surface)
   // changes the peak but not the slip stiffness B C D (MF 6.1: lambda_mu enters D only), so B
@@ -227,14 +272,19 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
       case Effect::LoadTransfer:
       case Effect::LoadTransferShape:
       case Effect::LoadTransferMeasured:  // Fz grows with the measured deceleration
+      {
+        const double lag_s = p[first + effect_params(effect).size() - 2];
+        const double mode_s2 = p[first + effect_params(effect).size() - 1];
+        std::vector<double> own;
         follow_load(
-            pitch_lagged_decel(r, p[first + effect_params(effect).size() - 2],
-                               p[first + effect_params(effect).size() - 1]),
+            kept(cache, r, PredictCache::Kind::Pitch, lag_s, mode_s2, own,
+                 [&] { return pitch_lagged_decel(r, lag_s, mode_s2); }),
             q, effect == Effect::LoadTransferMeasured ? r.load_laws.kx_over_peak : p[first + 1],
             effect == Effect::LoadTransferShape      ? p[first + 2]
             : effect == Effect::LoadTransferMeasured ? r.load_laws.e_per_peak_scale
                                                      : 0.0);
         break;
+      }
       case Effect::SpeedFriction:  // applied below, at the slip the curve is read at
         lambda_mu_v = q;
         break;
@@ -271,7 +321,11 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
                                   stiffness_n +
                               slip_offset + level_shift
                         : slip.front();
-    slip = relax(r, slip, sigma_m, k0);
+    std::vector<double> own;
+    slip = relax(slip,
+                 kept(cache, r, PredictCache::Kind::Relax, sigma_m, 0.0, own,
+                      [&] { return relax_steps(r, sigma_m); }),
+                 k0);
   }
   if (slip_offset != 0)
     for (double& s : slip) s -= slip_offset;
@@ -330,7 +384,12 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
   }
   // The filter's state at the run's first point is what the channel showed there (a run can
   // start on the ramp, less than tau after it began: neither at rest nor settled on it).
-  if (r.pressure_filter_s > 0) filter_first_order(r.t_s, f, r.pressure_filter_s, r.force_n.front());
+  if (const double tau_s = r.pressure_filter_s; tau_s > 0) {
+    std::vector<double> own;
+    filter_first_order(r.t_s, f, tau_s, r.force_n.front(),
+                       kept(cache, r, PredictCache::Kind::FilterDecay, tau_s, 0.0, own,
+                            [&] { return filter_decays(r.t_s, tau_s); }));
+  }
   return f;
 }
 
