@@ -97,17 +97,16 @@ std::vector<double> centred_mean(const std::vector<double>& t_s, const std::vect
 /// 40-300 ms would misplace the lag). y0: the transient slip at the first sample.
 std::vector<double> relax_steps(const Run& r, double sigma_m) {
   const std::size_t n = r.t_s.size();
-  std::vector<double> steps(2 * n, 0.0);  // h, then exp(-h) (1 where the wheel stands)
-  double* h = steps.data();
-  double* decay = steps.data() + n;
+  std::vector<double> h(n, 0.0), decay(n, 0.0);
   for (std::size_t i = 1; i < n; ++i) {
     h[i] = (r.t_s[i] - r.t_s[i - 1]) * 0.5 * (r.v_ref_mps[i] + r.v_ref_mps[i - 1]) / sigma_m;
     decay[i] = -h[i];
   }
-  std::vector<double> d(decay, decay + n);
-  exp_in_place(d);
-  for (std::size_t i = 1; i < n; ++i) decay[i] = h[i] < 1e-9 ? 1.0 : d[i];
-  return steps;
+  exp_in_place(decay);
+  for (std::size_t i = 1; i < n; ++i)
+    if (h[i] < 1e-9) decay[i] = 1.0;              // the wheel stands: nothing rolls, nothing decays
+  h.insert(h.end(), decay.begin(), decay.end());  // h, then exp(-h): one kept value
+  return h;
 }
 
 std::vector<double> relax(const Run& r, const std::vector<double>& k, double sigma_m, double y0) {

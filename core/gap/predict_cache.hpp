@@ -15,9 +15,9 @@ namespace brakefit::gap {
 /// quantity that depends on the run and on one or two parameters (the body's pitch at the load's
 /// lag and mode, the tyre's relaxation steps at its length, the declared filter's step decays)
 /// is asked again at the same values for every other parameter. It is kept here, per run and
-/// per the values it was computed at, for the last few values asked (the fit's point and its two
-/// perturbations). A kept value is the same computation's result, bit for bit: the fits take the
-/// same steps with it as without it.
+/// per the values it was computed at, for the last kPerKind values asked of each kind. A kept value
+/// is the same computation's result, bit for bit: the fits take the same steps with it as without
+/// it.
 ///
 /// A cache belongs to one fit: it keys on the runs' addresses, which must stay put and unchanged
 /// while it is used (the fits hold their runs const).
