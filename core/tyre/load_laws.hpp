@@ -9,8 +9,8 @@ struct Mf61Tyre;  // core/tyre/mf61.hpp
 
 /// The load laws at one wheel load. The defaults are car and van tyres' at their nominal loads
 /// (the four .tir files sim/second reads, TNO's published 205/60R15 and three composed in
-/// published ranges: d ln D / d ln Fz 0.87-0.97, d ln Kx / d ln D 1.15-1.33), which the
-/// diagnosis holds where the tyre's own file is not given.
+/// published ranges: d ln D / d ln Fz 0.87-0.97, d ln Kx / d ln D 1.15-1.33, E's change per
+/// unit of D's 0.13-0.34), which the diagnosis holds where the tyre's own file is not given.
 struct LoadLaws {
   /// d ln D / d ln Fz: MF 6.1's D = (PDX1 + PDX2 dfz) Fz gives 1 + PDX2 (Fz/Fz0) / (PDX1 + PDX2
   /// dfz).
@@ -18,8 +18,10 @@ struct LoadLaws {
   /// d ln Kx / d ln D, Kx = B C D = Fz (PKX1 + PKX2 dfz) exp(PKX3 dfz).
   double kx_over_peak = 1.25;
   /// dE per relative change of D (dE / d ln Fz over peak_exponent), E = (PEX1 + PEX2 dfz + PEX3
-  /// dfz^2)(1 + PEX4) braking; 0 where E is at its bound 1.
-  double e_per_peak_scale = 0.0;
+  /// dfz^2)(1 + PEX4) braking; 0 where E is at its bound 1. Held at 0.25: each of the four
+  /// files has E grow with the load, and a held E that does not leaves the peak's change to carry
+  /// the curve's whole reshaping.
+  double e_per_peak_scale = 0.25;
 };
 
 /// The spread of those four tyres' laws. Where the tyre's own file is not given, a load

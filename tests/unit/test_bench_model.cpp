@@ -185,6 +185,7 @@ TEST(BenchModel, ADeclaredLoadTransferIsHeldInTheFitsThroughASmoothedDeceleratio
   const std::vector<double> tyre{15.0, 1.58, 3400.0, 0.1};
   gap::Run steady = synthetic_run();
   steady.bench = can::BenchKind::Ground;
+  steady.load_laws.e_per_peak_scale = 0.0;  // the free effect's E stays; its laws' E below
   steady.ref_decel_mps2.assign(steady.t_s.size(), 6.0);
   gap::Run noisy = steady;
   for (std::size_t i = 0; i < noisy.t_s.size(); ++i)

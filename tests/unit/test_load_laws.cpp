@@ -3,6 +3,7 @@
 // published tyre files sim/second ships, read through the second simulator's own .tir reader.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -90,6 +91,28 @@ TEST_P(LoadLaws, FollowTheCurveReadAtNeighbouringLoads) {
 INSTANTIATE_TEST_SUITE_P(PublishedTyres, LoadLaws,
                          ::testing::Values("car_185_65r15.tir", "car_225_50r17.tir",
                                            "tno_205_60r15.tir", "van_215_65r16c.tir"));
+
+TEST(LoadLaws, HeldLawsLieAmongTheFourFilesAtTheirNominalLoads) {
+  // Held where the tyre's file is not given, each law must be one these tyres have: E's load
+  // slope too (held at zero, it left the peak's change to carry the curve's reshaping).
+  const tyre::LoadLaws held{};
+  double lo[3] = {1e9, 1e9, 1e9}, hi[3] = {-1e9, -1e9, -1e9};
+  for (const char* name :
+       {"car_185_65r15.tir", "car_225_50r17.tir", "tno_205_60r15.tir", "van_215_65r16c.tir"}) {
+    const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/sim/second/tyres/" + name;
+    const tyre::Mf61Tyre t =
+        tyre::tyre_from_tir(sim2::parse_tir(slurp(path), path).numbers, path);
+    const tyre::LoadLaws l = tyre::load_laws_at(t, t.ref.fnomin_n * t.ref.lfzo);
+    const double v[3] = {l.peak_exponent, l.kx_over_peak, l.e_per_peak_scale};
+    for (int i = 0; i < 3; ++i) lo[i] = std::min(lo[i], v[i]), hi[i] = std::max(hi[i], v[i]);
+  }
+  const double h[3] = {held.peak_exponent, held.kx_over_peak, held.e_per_peak_scale};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_GE(h[i], lo[i]) << "law " << i;
+    EXPECT_LE(h[i], hi[i]) << "law " << i;
+  }
+  EXPECT_GT(lo[2], 0.05);  // every file's E grows with the load
+}
 
 TEST(LoadLaws, GeneratorAsTyreReadOffItsCurvesHasItsFilesLaws) {
   // Generator A simulates the TNO 205/60R15 through its own MF 6.1 code; the referee reads its
