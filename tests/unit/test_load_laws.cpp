@@ -100,8 +100,7 @@ TEST(LoadLaws, HeldLawsLieAmongTheFourFilesAtTheirNominalLoads) {
   for (const char* name :
        {"car_185_65r15.tir", "car_225_50r17.tir", "tno_205_60r15.tir", "van_215_65r16c.tir"}) {
     const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/sim/second/tyres/" + name;
-    const tyre::Mf61Tyre t =
-        tyre::tyre_from_tir(sim2::parse_tir(slurp(path), path).numbers, path);
+    const tyre::Mf61Tyre t = tyre::tyre_from_tir(sim2::parse_tir(slurp(path), path).numbers, path);
     const tyre::LoadLaws l = tyre::load_laws_at(t, t.ref.fnomin_n * t.ref.lfzo);
     const double v[3] = {l.peak_exponent, l.kx_over_peak, l.e_per_peak_scale};
     for (int i = 0; i < 3; ++i) lo[i] = std::min(lo[i], v[i]), hi[i] = std::max(hi[i], v[i]);
