@@ -238,7 +238,7 @@ std::vector<double> predict(const Run& r, const std::vector<double>& p,
     for (std::size_t i = 0; i < n; ++i) b_scale[i] *= power[i];
   };
   // A declared load is read through the tyre's load laws as a measured one is: E too changes
-  // with the load where the tyre's file gives it (0 at published tyres' laws).
+  // with the load, at the tyre's file's slope or the published tyres' 0.25.
   if (const double q = r.declared_load_per_decel_s2_per_m; q != 0 && r.ref_decel_mps2.size() == n)
     follow_load(centred_mean(r.t_s, r.ref_decel_mps2, kDeclaredLoadHalfWindowS), q,
                 r.declared_kx_load_ratio, r.load_laws.e_per_peak_scale);

@@ -212,8 +212,9 @@ TEST(BenchModel, ADeclaredLoadTransferIsHeldInTheFitsThroughASmoothedDeceleratio
   EXPECT_GT(noise_effect, 10.0);
   EXPECT_LT(noise_held, 0.1 * noise_effect);
 
-  // At a tyre's own load laws (its file given) E changes with the load too: the declared load
-  // is the measured load transfer's at the same q, not the one with E fixed.
+  // At the held load laws (a tyre's file's, else the published tyres') E changes with the load
+  // too: the declared load is the measured load transfer's at the same q, not the one with E
+  // fixed.
   steady.load_laws = tyre::LoadLaws{0.9, 1.4, 0.3};
   steady.declared_kx_load_ratio = 1.4;
   const auto held_at_laws = gap::predict(steady, tyre, {});
