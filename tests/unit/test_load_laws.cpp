@@ -52,6 +52,10 @@ Read read_curve(const tyre::Mf61Tyre& t, double fz_n) {
   return r;
 }
 
+/// The four car and van files whose laws the diagnosis holds where a tyre's own is not given.
+constexpr const char* kPublishedTyres[] = {"car_185_65r15.tir", "car_225_50r17.tir",
+                                           "tno_205_60r15.tir", "van_215_65r16c.tir"};
+
 class LoadLaws : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(LoadLaws, FollowTheCurveReadAtNeighbouringLoads) {
@@ -88,17 +92,14 @@ TEST_P(LoadLaws, FollowTheCurveReadAtNeighbouringLoads) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(PublishedTyres, LoadLaws,
-                         ::testing::Values("car_185_65r15.tir", "car_225_50r17.tir",
-                                           "tno_205_60r15.tir", "van_215_65r16c.tir"));
+INSTANTIATE_TEST_SUITE_P(PublishedTyres, LoadLaws, ::testing::ValuesIn(kPublishedTyres));
 
 TEST(LoadLaws, HeldLawsLieAmongTheFourFilesAtTheirNominalLoads) {
-  // Held where the tyre's file is not given, each law must be one these tyres have: E's load
-  // slope too (held at zero, it left the peak's change to carry the curve's reshaping).
+  // Held where the tyre's file is not given, each law must be one these tyres have, E's load
+  // slope too.
   const tyre::LoadLaws held{};
   double lo[3] = {1e9, 1e9, 1e9}, hi[3] = {-1e9, -1e9, -1e9};
-  for (const char* name :
-       {"car_185_65r15.tir", "car_225_50r17.tir", "tno_205_60r15.tir", "van_215_65r16c.tir"}) {
+  for (const char* name : kPublishedTyres) {
     const std::string path = std::string(BRAKEFIT_SOURCE_DIR) + "/sim/second/tyres/" + name;
     const tyre::Mf61Tyre t = tyre::tyre_from_tir(sim2::parse_tir(slurp(path), path).numbers, path);
     const tyre::LoadLaws l = tyre::load_laws_at(t, t.ref.fnomin_n * t.ref.lfzo);
