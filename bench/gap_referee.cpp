@@ -4,6 +4,7 @@
 //               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1|0|only]
 //               [--only EFFECT,...] [--pick I,...] [--why 1|2] [--pairs N] [--detection SETS]
 //               [--results FILE [--results-key K]] [--export-hz HZ] [--outside N] [--tyre-file]
+//               [--dry-run 1]
 // Three generators make the runs: A, the project's simulator (candump logs), B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export), and C, a physics written outside the project (--gen-c, by default
@@ -22,6 +23,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -33,6 +35,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "bench/outside_generator.hpp"
@@ -48,6 +51,11 @@ using namespace brakefit;
 
 namespace {
 
+/// A command line the referee cannot run: said with the option, exit 64.
+struct Usage : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 int run(int argc, char** argv) {
   const auto started = std::chrono::steady_clock::now();
   const std::string commit = bench::source_commit();
@@ -60,6 +68,7 @@ int run(int argc, char** argv) {
   bool tyre_file = false;  // --tyre-file 1: each diagnosis given its tyre's load laws (gap --tir)
   std::string export_hz_text;  // --export-hz: generator B's export rate (empty: as drawn)
   bool crossed = true, crossed_only = false;  // --crossed 1|0|only
+  bool dry_run = false;  // --dry-run 1: the options checked and the rows listed, nothing run
   st.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int i = 1; i < argc; i += 2) {
     const std::string k = argv[i];
@@ -90,28 +99,47 @@ int run(int argc, char** argv) {
              "                         by default the condition and generators; the command\n"
              "                         and the commit at its head)\n"
              "  [--why 1|2]           (1: each miss's notes, the misses are always listed;\n"
-             "                         2: each hit too, with its estimate, gap left and notes)\n";
+             "                         2: each hit too, with its estimate, gap left and notes)\n"
+             "  [--dry-run 1]         (the options checked and the rows listed as JSON; nothing\n"
+             "                         calibrated or run)\n";
       return k == "-h" || k == "--help" ? 0 : 64;
     }
     const char* v = argv[i + 1];
+    // A count or a share that does not read as one is refused by its option's name: atoi's 0
+    // would run a referee of no trials for hours of calibration.
+    const auto count = [&](int& out, int at_least) {
+      char* end = nullptr;
+      errno = 0;
+      const long n = std::strtol(v, &end, 10);
+      if (end == v || *end != '\0' || errno != 0 || n < at_least || n > 1'000'000)
+        throw Usage(fmt::format("{} takes a whole number from {}, not '{}'", k, at_least, v));
+      out = static_cast<int>(n);
+    };
     if (k == "--trials")
-      st.trials = std::atoi(v);
+      count(st.trials, 0);
     else if (k == "--trials-other")
-      st.trials_other = std::atoi(v);
+      count(st.trials_other, 0);
     else if (k == "--calibrate")
-      st.calib = std::max(1, std::atoi(v));
+      count(st.calib, 1);
     else if (k == "--pairs")
-      st.pairs = std::atoi(v);
+      count(st.pairs, 0);
     else if (k == "--misspecified")
-      st.misspecified = std::atoi(v);
+      count(st.misspecified, 0);
     else if (k == "--outside")
-      st.outside = std::atoi(v);
-    else if (k == "--null-share")
-      st.null_share = std::atof(v);
-    else if (k == "--seed")
-      st.seed = std::strtoull(v, nullptr, 10);
-    else if (k == "--threads")
-      st.threads = std::atoi(v);
+      count(st.outside, 0);
+    else if (k == "--null-share") {
+      char* end = nullptr;
+      st.null_share = std::strtod(v, &end);
+      if (end == v || *end != '\0' || !(st.null_share >= 0 && st.null_share <= 1))
+        throw Usage(fmt::format("--null-share takes a share from 0 to 1, not '{}'", v));
+    } else if (k == "--seed") {
+      char* end = nullptr;
+      errno = 0;
+      st.seed = std::strtoull(v, &end, 10);
+      if (end == v || *end != '\0' || errno != 0 || *v == '-')
+        throw Usage(fmt::format("--seed takes a whole number, not '{}'", v));
+    } else if (k == "--threads")
+      count(st.threads, 1);
     else if (k == "--condition")
       which = v;
     else if (k == "--generators")
@@ -119,10 +147,10 @@ int run(int argc, char** argv) {
     else if (k == "--gen-c")
       gen_c = v;
     else if (k == "--detection")
-      st.detection = std::atoi(v);
-    else if (k == "--detection-levels")
-      st.detection_levels = std::max(2, std::atoi(v));
-    else if (k == "--results")
+      count(st.detection, 0);
+    else if (k == "--detection-levels") {
+      count(st.detection_levels, 2);
+    } else if (k == "--results")
       results = v;
     else if (k == "--results-key")
       results_key = v;
@@ -132,7 +160,11 @@ int run(int argc, char** argv) {
       stations = v;
     else if (k == "--export-hz")
       export_hz_text = v;
-    else if (k == "--tyre-file") {
+    else if (k == "--dry-run") {
+      const std::string w = v;
+      if (w != "1" && w != "0") throw Usage(fmt::format("--dry-run takes 1 or 0, not '{}'", w));
+      dry_run = w == "1";
+    } else if (k == "--tyre-file") {
       const std::string w = v;
       if (w != "1" && w != "0") {
         std::cerr << "gap_referee: --tyre-file takes 1 or 0, not '" << w << "'\n";
@@ -146,7 +178,7 @@ int run(int argc, char** argv) {
       std::stringstream list(v);
       for (std::string e; std::getline(list, e, ',');) st.pick.push_back(std::atoi(e.c_str()));
     } else if (k == "--why")
-      st.why = std::atoi(v);
+      count(st.why, 0);
     else if (k == "--crossed") {
       const std::string w = v;
       if (w != "1" && w != "yes" && w != "0" && w != "no" && w != "only") {
@@ -178,9 +210,13 @@ int run(int argc, char** argv) {
   }
   sim::set_generator_b_export_hz(export_hz);
   sim::set_tyre_file_known(tyre_file);
-  if (!results.empty() && !std::ofstream(results, std::ios::app)) {  // before hours of trials
-    std::cerr << "gap_referee: cannot write the results file " << results << "\n";
-    return 73;
+  if (!results.empty()) {  // before hours of trials
+    const auto dir = std::filesystem::path(results).parent_path();
+    if (dry_run ? !std::filesystem::is_directory(dir.empty() ? "." : dir)
+                : !std::ofstream(results, std::ios::app)) {
+      std::cerr << "gap_referee: cannot write the results file " << results << "\n";
+      return 73;
+    }
   }
   if (generators.find('C') != std::string::npos) {
     if (!std::filesystem::exists(gen_c)) {
@@ -195,36 +231,54 @@ int run(int argc, char** argv) {
       return bench::outside_runs(gen_c, inj, seed);
     });
   }
+  // The rows: for each condition, straight (trials and gates of one generator), then crossed
+  // (gates of another). Generators B and C make model-vs-measurement runs only; roller vs road
+  // stays A's.
+  struct Row {
+    gap::Condition condition;
+    sim::Generator trial, gate;
+  };
+  std::vector<Row> rows;
+  std::map<gap::Condition, std::vector<sim::Generator>> calibrated;
+  for (auto c : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad}) {
+    if (which != "all" && which != gap::to_string(c)) continue;
+    auto& gens = calibrated[c];
+    for (auto g : {sim::Generator::A, sim::Generator::B, sim::Generator::C})
+      if (generators.find(sim::to_string(g)) != std::string::npos &&
+          (g == sim::Generator::A || c != gap::Condition::RollerToRoad))
+        gens.push_back(g);
+    for (auto trial : gens)
+      for (auto gate : gens)
+        if ((gate == trial ? !crossed_only : crossed) &&
+            (trials_from.empty() || trials_from.find(sim::to_string(trial)) != std::string::npos))
+          rows.push_back({c, trial, gate});
+  }
+  if (calibrated.empty()) {
+    std::cerr << "gap_referee: --condition must be roller, ground, roller_vs_road or all\n";
+    return 64;
+  }
   nlohmann::ordered_json j;
-  j["schema"] = "brakefit.gap_referee/1";
+  j["schema"] = dry_run ? "brakefit.gap_referee_plan/1" : "brakefit.gap_referee/1";
   j["version"] = kVersion;
   j["seed"] = st.seed;
   j["stations"] = stations;
   if (export_hz > 0) j["export_hz"] = export_hz;
   j["tyre_file"] = tyre_file;
-  bool any = false;
-  for (auto c : {gap::Condition::Roller, gap::Condition::Ground, gap::Condition::RollerToRoad}) {
-    if (which != "all" && which != gap::to_string(c)) continue;
-    any = true;
-    // Generators B and C make model-vs-measurement runs only; roller vs road stays A's.
-    std::vector<sim::Generator> gens;
-    for (auto g : {sim::Generator::A, sim::Generator::B, sim::Generator::C})
-      if (generators.find(sim::to_string(g)) != std::string::npos &&
-          (g == sim::Generator::A || c != gap::Condition::RollerToRoad))
-        gens.push_back(g);
-    std::map<sim::Generator, sim::GateCalibration> gates;
-    for (auto g : gens) gates[g] = bench::calibrate(c, st, g);
-    // Straight (trials and gates of one generator), then crossed (gates of the other).
-    for (auto trial : gens)
-      for (auto gate : gens)
-        if ((gate == trial ? !crossed_only : crossed) &&
-            (trials_from.empty() || trials_from.find(sim::to_string(trial)) != std::string::npos))
-          j["conditions"].push_back(bench::run_condition(c, st, trial, gates[gate], gate));
+  if (dry_run) {
+    j["rows"] = nlohmann::ordered_json::array();
+    for (const auto& r : rows)
+      j["rows"].push_back({{"condition", gap::to_string(r.condition)},
+                           {"trial_generator", sim::to_string(r.trial)},
+                           {"gate_generator", sim::to_string(r.gate)}});
+    std::cout << j.dump() << "\n";
+    return 0;
   }
-  if (!any) {
-    std::cerr << "gap_referee: --condition must be roller, ground, roller_vs_road or all\n";
-    return 64;
-  }
+  std::map<std::pair<gap::Condition, sim::Generator>, sim::GateCalibration> gates;
+  for (const auto& [c, gens] : calibrated)
+    for (auto g : gens) gates[{c, g}] = bench::calibrate(c, st, g);
+  for (const auto& r : rows)
+    j["conditions"].push_back(
+        bench::run_condition(r.condition, st, r.trial, gates[{r.condition, r.gate}], r.gate));
   std::cout << "\n" << j.dump() << "\n";
   if (!results.empty()) {
     std::string command;
@@ -249,6 +303,9 @@ int run(int argc, char** argv) {
 int main(int argc, char** argv) {
   try {
     return run(argc, argv);
+  } catch (const Usage& e) {
+    std::cerr << "gap_referee: " << e.what() << "\n";
+    return 64;
   } catch (const std::exception& e) {
     std::cerr << "gap_referee: " << e.what() << "\n";
     return 70;
