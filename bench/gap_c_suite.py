@@ -47,6 +47,7 @@ import tempfile
 import time
 
 from gen_c_tyres import write_all as write_c_tyres
+from results_block import source_commit, writable, write_block
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 G_MPS2 = 9.81
@@ -220,17 +221,7 @@ def table(rows, per_effect, errors, load_by_tyre, band_by_tyre):
 
 
 def write_results(path, text, key=""):
-    name = f"gap_c_suite {key}" if key else "gap_c_suite"
-    begin, end = f"<!-- {name} begin -->", f"<!-- {name} end -->"
-    with open(path) as f:
-        doc = f.read()
-    block = f"{begin}\n{text}\n{end}"
-    if begin in doc and end in doc:
-        doc = doc[: doc.index(begin)] + block + doc[doc.index(end) + len(end):]
-    else:
-        doc = doc.rstrip("\n") + "\n\n" + block + "\n"
-    with open(path, "w") as f:
-        f.write(doc)
+    write_block(path, f"gap_c_suite {key}" if key else "gap_c_suite", text)
 
 
 def main():
@@ -244,6 +235,8 @@ def main():
                     help="give each set its tyre's MF 6.1 file (from generator C's TYRES)")
     ap.add_argument("--results", help="markdown file to write the table into")
     ap.add_argument("--results-key", default="", help="its block's key (several blocks a file)")
+    ap.add_argument("--dry-run", action="store_true",
+                    help="check the options and what they name, print the plan, run nothing")
     a = ap.parse_args()
     try:
         seeds = [int(x) for x in a.seed.split(",")]
@@ -254,6 +247,17 @@ def main():
     brakefit = os.path.join(a.build, "cli", "brakefit")
     if not os.access(brakefit, os.X_OK):
         sys.exit(f"gap_c_suite: {brakefit} is not built (--build)")
+    if not a.set and not os.path.exists(a.gen_c):
+        sys.exit(f"gap_c_suite: generator C's script {a.gen_c} is not there (--gen-c)")
+    if a.set and not os.path.exists(os.path.join(a.set, "truth.json")):
+        sys.exit(f"gap_c_suite: {a.set} holds no truth.json (--set)")
+    if a.results and not writable(a.results):
+        sys.exit(f"gap_c_suite: cannot write the results file {a.results}")
+    if a.dry_run:
+        print(json.dumps({"schema": "brakefit.gap_c_suite_plan/1", "version": "0.1.0",
+                          "seeds": seeds, "set": a.set, "tir": a.tir, "results": a.results,
+                          "results_key": a.results_key}))
+        return
     start = time.time()
     truth, docs = [], []
     with tempfile.TemporaryDirectory(prefix="gap_c_suite-") as tmp:
@@ -264,8 +268,6 @@ def main():
         for seed in seeds:
             set_dir = a.set or os.path.join(tmp, f"set{seed}")
             if not a.set:
-                if not os.path.exists(a.gen_c):
-                    sys.exit(f"gap_c_suite: generator C's script {a.gen_c} is not there (--gen-c)")
                 log(f"writing generator C's suite (seed {seed}) to {set_dir}")
                 subprocess.run([sys.executable, a.gen_c, set_dir, "--seed", str(seed)],
                                check=True, stdout=subprocess.DEVNULL)
@@ -284,8 +286,7 @@ def main():
             docs += found
     rows, per_effect, errors, misses, named, load_by_tyre, band_by_tyre, extras = score(truth, docs)
     minutes = (time.time() - start) / 60
-    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
-                            capture_output=True, text=True).stdout.strip()
+    commit = source_commit(ROOT)
     command = shlex.join(["/usr/bin/python3", "bench/gap_c_suite.py"] + sys.argv[1:])
     head = (f"<!-- written by `{command}` at commit {commit} ({datetime.date.today()}, "
             f"{minutes:.0f} min; {len(truth)} sets of generator C, "
