@@ -1,8 +1,10 @@
 #pragma once
-// What the referee's draws (referee_draws.cpp) and its trials (referee.cpp) share.
+// What the referee's draws (referee_draws.cpp), its trials (referee.cpp) and their scoring
+// (referee_score.cpp) share.
 #include <string>
 
 #include "core/tyre/load_laws.hpp"
+#include "sim/referee.hpp"
 #include "sim/scenario.hpp"
 
 namespace brakefit::sim::detail {
@@ -16,5 +18,8 @@ tyre::LoadLaws load_laws(const Scenario& s);
 
 /// A relaxation (sigma / V) or a time offset: at one speed, one lag.
 bool is_lag(const std::string& e);
+
+/// A trial's result: the diagnosis's report scored against the injection (referee_score.cpp).
+TrialResult score(const Injection& inj, const gap::Report& rep);
 
 }  // namespace brakefit::sim::detail
