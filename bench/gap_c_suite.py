@@ -2,8 +2,8 @@
 """Generator C's suite through `brakefit gap`, scored against its truth.
 
     /usr/bin/python3 bench/gap_c_suite.py [--gen-c ../shared/gapgen/gen_c.py] [--seed 77[,5,...]]
-        [--build build/release] [--threads 2] [--tir] [--results docs/gap_results.md
-        [--results-key K]]
+        [--build build/release] [--threads 2] [--tir] [--gap-arg=OPTION ...]
+        [--results docs/gap_results.md [--results-key K]]
       (generator C imports numpy: Debian's python3-numpy, under /usr/bin/python3)
 
 Generator C (written outside the project) writes its plan of sets (94 at its default seed, 77):
@@ -68,11 +68,12 @@ def log(msg):
     print(f"[gap_c_suite] {msg}", file=sys.stderr, flush=True)
 
 
-def diagnose(brakefit, set_dir, case, tir_dir=None):
+def diagnose(brakefit, set_dir, case, tir_dir=None, gap_args=()):
     d = os.path.join(set_dir, case["case"])
     runs = sorted(os.path.join(d, f) for f in os.listdir(d) if f.endswith(".csv"))
     tir = ["--tir", os.path.join(tir_dir, case["tyre"] + ".tir")] if tir_dir and case.get("tyre") else []
-    p = subprocess.run([brakefit, "gap", "--json", *tir, *runs], capture_output=True, text=True)
+    p = subprocess.run([brakefit, "gap", "--json", *gap_args, *tir, *runs], capture_output=True,
+                       text=True)
     try:
         return json.loads(p.stdout)
     except json.JSONDecodeError:
@@ -235,6 +236,8 @@ def main():
                     help="give each set its tyre's MF 6.1 file (from generator C's TYRES)")
     ap.add_argument("--results", help="markdown file to write the table into")
     ap.add_argument("--results-key", default="", help="its block's key (several blocks a file)")
+    ap.add_argument("--gap-arg", action="append", default=[],
+                    help="an option for each `brakefit gap` (--gap-arg=--realign-delay)")
     ap.add_argument("--dry-run", action="store_true",
                     help="check the options and what they name, print the plan, run nothing")
     a = ap.parse_args()
@@ -275,7 +278,7 @@ def main():
                 cases = json.load(f)
             found = [None] * len(cases)
             with cf.ThreadPoolExecutor(a.threads) as ex:
-                futures = {ex.submit(diagnose, brakefit, set_dir, c, tir_dir): i for i, c in enumerate(cases)}
+                futures = {ex.submit(diagnose, brakefit, set_dir, c, tir_dir, a.gap_arg): i for i, c in enumerate(cases)}
                 for n, fut in enumerate(cf.as_completed(futures), 1):
                     found[futures[fut]] = fut.result()
                     if n % 10 == 0 or n == len(cases):

@@ -4,7 +4,7 @@
 //               [--generators A,B,C] [--gen-c SCRIPT] [--trials-from C] [--crossed 1|0|only]
 //               [--only EFFECT,...] [--pick I,...] [--why 1|2] [--pairs N] [--detection SETS]
 //               [--results FILE [--results-key K]] [--export-hz HZ] [--outside N] [--tyre-file]
-//               [--dry-run 1]
+//               [--realign 1] [--dry-run 1]
 // Three generators make the runs: A, the project's simulator (candump logs), B, the second
 // physics written apart (sim/second: MF 6.1 .tir tyres and a brush family, its own integrator, a
 // tester's event-CSV export), and C, a physics written outside the project (--gen-c, by default
@@ -69,6 +69,8 @@ int run(int argc, char** argv) {
   std::string export_hz_text;  // --export-hz: generator B's export rate (empty: as drawn)
   bool crossed = true, crossed_only = false;  // --crossed 1|0|only
   bool dry_run = false;  // --dry-run 1: the options checked and the rows listed, nothing run
+  bool realign =
+      false;  // --realign 1: each diagnosis realigns a late channel (gap --realign-delay)
   st.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int i = 1; i < argc; i += 2) {
     const std::string k = argv[i];
@@ -100,6 +102,8 @@ int run(int argc, char** argv) {
              "                         and the commit at its head)\n"
              "  [--why 1|2]           (1: each miss's notes, the misses are always listed;\n"
              "                         2: each hit too, with its estimate, gap left and notes)\n"
+             "  [--realign 1]         (each diagnosis reads a late channel at the delay named\n"
+             "                         and diagnoses again, as `brakefit gap --realign-delay`)\n"
              "  [--dry-run 1]         (the options checked and the rows listed as JSON; nothing\n"
              "                         calibrated or run)\n";
       return k == "-h" || k == "--help" ? 0 : 64;
@@ -160,7 +164,11 @@ int run(int argc, char** argv) {
       stations = v;
     else if (k == "--export-hz")
       export_hz_text = v;
-    else if (k == "--dry-run") {
+    else if (k == "--realign") {
+      const std::string w = v;
+      if (w != "1" && w != "0") throw Usage(fmt::format("--realign takes 1 or 0, not '{}'", w));
+      realign = w == "1";
+    } else if (k == "--dry-run") {
       const std::string w = v;
       if (w != "1" && w != "0") throw Usage(fmt::format("--dry-run takes 1 or 0, not '{}'", w));
       dry_run = w == "1";
@@ -210,6 +218,7 @@ int run(int argc, char** argv) {
   }
   sim::set_generator_b_export_hz(export_hz);
   sim::set_tyre_file_known(tyre_file);
+  sim::set_realign_late_channel(realign);
   if (!results.empty()) {  // before hours of trials
     const auto dir = std::filesystem::path(results).parent_path();
     if (dry_run ? !std::filesystem::is_directory(dir.empty() ? "." : dir)
@@ -264,6 +273,7 @@ int run(int argc, char** argv) {
   j["stations"] = stations;
   if (export_hz > 0) j["export_hz"] = export_hz;
   j["tyre_file"] = tyre_file;
+  if (realign) j["realign_late_channel"] = true;
   if (dry_run) {
     j["rows"] = nlohmann::ordered_json::array();
     for (const auto& r : rows)

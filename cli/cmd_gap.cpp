@@ -67,10 +67,11 @@ void add_gap_command(CLI::App& app) {
     std::string report, force = "pressure", model, bench_model;
     bool json = false;
     RunOptions run;
-    double gate_gain = NAN, bic_margin = NAN;     ///< NaN: the calibrated gate of the condition
-    double bic_margin_per_point = NAN;            ///< NaN: none (the condition's)
-    double fit_quality_factor = NAN;              ///< NaN: the condition's (1.5)
-    double vehicle_mass_kg = 0.0;                 ///< 0: not given
+    double gate_gain = NAN, bic_margin = NAN;  ///< NaN: the calibrated gate of the condition
+    double bic_margin_per_point = NAN;         ///< NaN: none (the condition's)
+    double fit_quality_factor = NAN;           ///< NaN: the condition's (1.5)
+    bool realign = false;          ///< --realign-delay: a late channel read at the delay named
+    double vehicle_mass_kg = 0.0;  ///< 0: not given
     double cg_height_m = 0.0, wheelbase_m = 0.0;  ///< 0: not given
     std::string axle = "front";
     std::string tir;  ///< the tyre's MF 6.1 file (empty: published tyres' load laws)
@@ -107,6 +108,10 @@ void add_gap_command(CLI::App& app) {
                   "a held-out gap above this x the noise floor is `unexplained` (default 1.5; "
                   "bench/gap_referee calibrates it on null data, as the gates)")
       ->check(CLI::PositiveNumber);
+  cmd->add_flag("--realign-delay", o->realign,
+                "where a time offset of 20 ms or more is named on ground runs, read the force "
+                "channel that much later and diagnose the runs again (each run then keeps its "
+                "curve up to its runaway): what the runs show beside the delay");
   cmd->add_option("--vehicle-mass", o->vehicle_mass_kg,
                   "the vehicle's mass in kg: load transfer is also given as the centre of "
                   "gravity's height over the wheelbase (h/L), from the runs' wheel load")
@@ -246,6 +251,7 @@ void add_gap_command(CLI::App& app) {
     if (std::isfinite(o->bic_margin_per_point))
       gap_options.bic_margin_per_point = o->bic_margin_per_point;
     if (std::isfinite(o->fit_quality_factor)) gap_options.noise_factor = o->fit_quality_factor;
+    gap_options.realign_late_channel = o->realign;
     spdlog::info(
         "gap: condition {}, gates: held-out gain >= {:.3f}, BIC drop >= max({:.1f}, {:.4f} per "
         "point), fit-quality factor {:.2f}",

@@ -164,10 +164,13 @@ void set_outside_runs(OutsideRuns f) {
 
 namespace {
 bool g_tyre_file_known = false;  // set once by the referee before its threads start
+bool g_realign = false;          // the same
 
-/// The gates, with the trial's tyre's load laws where its file is taken as known.
-gap::Options with_tyre_file(const gap::Options& o, const Injection& inj) {
+/// The gates, with the trial's tyre's load laws where its file is taken as known, and a late
+/// channel realigned where that is asked.
+gap::Options trial_options(const gap::Options& o, const Injection& inj) {
   gap::Options out = o;
+  out.realign_late_channel = o.realign_late_channel || g_realign;
   if (g_tyre_file_known) {
     out.tyre_load_laws = inj.tyre_laws;
     out.tyre_load_laws_source = "the simulated tyre's file";
@@ -178,6 +181,10 @@ gap::Options with_tyre_file(const gap::Options& o, const Injection& inj) {
 
 void set_tyre_file_known(bool known) {
   g_tyre_file_known = known;
+}
+
+void set_realign_late_channel(bool realign) {
+  g_realign = realign;
 }
 
 namespace {
@@ -192,13 +199,13 @@ gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
     if (c == gap::Condition::RollerToRoad || !g_outside)
       throw InputError("generator C makes roller and ground runs, through the referee's runner");
     const auto runs = g_outside(inj, seed);
-    return gap::diagnose(runs, pooled_start(runs), with_tyre_file(o, inj));
+    return gap::diagnose(runs, pooled_start(runs), trial_options(o, inj));
   }
   if (inj.generator == Generator::B) {
     if (c == gap::Condition::RollerToRoad)
       throw InputError("generator B makes model-vs-measurement runs (roller, ground) only");
     const auto runs = generator_b_runs(inj, seed);
-    return gap::diagnose(runs, pooled_start(runs), with_tyre_file(o, inj));
+    return gap::diagnose(runs, pooled_start(runs), trial_options(o, inj));
   }
   if (c != gap::Condition::RollerToRoad) {
     const Scenario s = inject(
@@ -207,7 +214,7 @@ gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
     set_load_truth(inj, s);
     inj.tyre_laws = detail::load_laws(s);
     const auto runs = simulate_runs(s, seed);
-    return gap::diagnose(runs, pooled_start(runs), with_tyre_file(o, inj));
+    return gap::diagnose(runs, pooled_start(runs), trial_options(o, inj));
   }
   Scenario roller = referee_null(can::BenchKind::Roller);
   Scenario road = referee_null(can::BenchKind::Ground);
@@ -221,7 +228,7 @@ gap::Report diagnose_blind(gap::Condition c, Injection& inj, std::uint64_t seed,
   const auto roller_runs = simulate_runs(roller, seed);
   const auto road_runs = simulate_runs(road, seed + 7'777'777);
   return gap::diagnose_transfer(roller_runs, road_runs, pooled_start(roller_runs),
-                                with_tyre_file(o, inj));
+                                trial_options(o, inj));
 }
 
 }  // namespace

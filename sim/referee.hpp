@@ -145,6 +145,9 @@ void set_outside_runs(OutsideRuns f);
 /// gap --tir` is given the tyre's file (default: not, published tyres' laws). Set before the
 /// referee's threads start.
 void set_tyre_file_known(bool known);
+/// Every diagnosis realigns a late channel (gap::Options::realign_late_channel; default: not).
+/// Set before the referee's threads start.
+void set_realign_late_channel(bool realign);
 
 /// The seeds bench/gap_referee gives its pair draws, its pair trials and its misspecified sets,
 /// here so that a test reruns one of them as the referee ran it.

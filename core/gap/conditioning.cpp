@@ -13,6 +13,7 @@
 #include "core/curve.hpp"
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
+#include "core/gap/realign.hpp"
 
 namespace brakefit::gap {
 
@@ -124,6 +125,9 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
     take(e.lead_in[i]);
   measure_rest_slip(full, std::span(e.lead_in).first(rest), rest_bar);
   for (const auto& s : e.samples) take(s);
+  if (o.channel_advance_s > 0)
+    advance_channel(full.t_s, o.channel_advance_s, {&pressure, &full.force_n},
+                    {&full.v_ref_mps, &v_wheel});
   if (const std::size_t keep = runaway_cut(full, v_wheel, c.bench, o); keep < full.t_s.size()) {
     full.t_s.resize(keep);
     full.v_ref_mps.resize(keep);
@@ -357,6 +361,7 @@ Run condition(const std::string& name, const pipeline::Event& e, const pipeline:
   if (const StartLine slip = start_line(full.t_s, full.slip, kInitialWindowS); slip.points >= 3)
     full.initial_slip_rate_per_s = std::max(0.0, slip.slope);
   full.initial_force_n = line_force_at_start(full.t_s, full.force_n, full.pressure_filter_s);
+  full.source = std::make_shared<const RunSource>(RunSource{name, e, c, o});
   return decimate(std::move(full), o.max_points);
 }
 

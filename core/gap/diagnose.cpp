@@ -8,6 +8,7 @@
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
+#include "core/gap/realign.hpp"
 #include "core/gap/warm_fit.hpp"
 
 namespace brakefit::gap {
@@ -235,7 +236,9 @@ Report diagnose_runs(const std::vector<Run>& runs_in, const MfParams& start, con
 
 }  // namespace
 
-Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Options& o) {
+namespace {
+
+Report diagnose_checked(const std::vector<Run>& runs_in, const MfParams& start, const Options& o) {
   if (runs_in.size() < 2)
     throw InputError(
         "gap diagnosis needs at least two runs (it checks every effect on a run it was not fitted "
@@ -272,6 +275,15 @@ Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Op
         std::find(v.begin(), v.end(), "unexplained") == v.end())
       return capped;
   }
+  return rep;
+}
+
+}  // namespace
+
+Report diagnose(const std::vector<Run>& runs_in, const MfParams& start, const Options& o) {
+  Report rep = diagnose_checked(runs_in, start, o);
+  if (o.realign_late_channel)
+    if (auto aligned = realigned(rep, runs_in, start, o)) return std::move(*aligned);
   return rep;
 }
 

@@ -125,6 +125,10 @@ struct Options {
   tyre::LoadLaws tyre_load_laws;
   std::string tyre_load_laws_source;
   std::size_t max_effects = 3;  ///< forward selection depth
+  /// A time offset named of kRealignMinDelayS or more on the ground: the runs conditioned again
+  /// with the force channel read that much later and diagnosed again (realign.cpp; needs each
+  /// run's source).
+  bool realign_late_channel = false;
   /// When a gap above noise_factor x noise is left, the first accepted effect must have had at
   /// least this held-out gain, else none is named (fit-quality check: a curve that is not a Magic
   /// Formula makes every candidate nibble at the residual; a real effect takes a large bite).

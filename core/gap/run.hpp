@@ -12,6 +12,8 @@
 
 namespace brakefit::gap {
 
+struct RunSource;
+
 /// One conditioned run (a brake event), decimated for fitting.
 struct Run {
   std::string name;
@@ -157,6 +159,9 @@ struct Run {
   /// The run was cut at a lock-up runaway; the force at its last kept sample.
   bool runaway = false;
   double runaway_force_n = 0.0;
+  /// What the run was conditioned from (null for a run built otherwise): a diagnosis conditions
+  /// it again with its force channel read later (realign.cpp).
+  std::shared_ptr<const RunSource> source;
 };
 
 struct ConditionOptions {
@@ -172,6 +177,17 @@ struct ConditionOptions {
   /// 144 at 130: a lock-up at any road speed.
   double ground_runaway_slip_per_s = 4.0;
   pipeline::ForceSource force = pipeline::ForceSource::Pressure;
+  /// The force channel read this much later than the speeds (0: as recorded): a channel late by
+  /// this shows each moment's force here; the run ends this much before its last sample.
+  double channel_advance_s = 0.0;
+};
+
+/// A run's event, the calibration and options it was conditioned with.
+struct RunSource {
+  std::string name;
+  pipeline::Event event;
+  pipeline::Calibration calibration;
+  ConditionOptions options;
 };
 Run condition(const std::string& name, const pipeline::Event& e, const pipeline::Calibration& c,
               const ConditionOptions& o);

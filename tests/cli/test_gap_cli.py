@@ -297,6 +297,16 @@ class Gap(unittest.TestCase):
         self.assertIn("--roller and --road", r.stderr)
         self.assertIn("ground_2p2bar_150barps", r.stderr)
 
+    def simulate(self, scenario, ramps):
+        """Runs of `scenario` at these pedal ramps, beside it: their candump logs."""
+        runs = []
+        for ramp in ramps:
+            out = os.path.join(os.path.dirname(scenario), f"run_{ramp}.log")
+            r = run("simulate", scenario, "--ramp", ramp, "--out", out)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            runs.append(out)
+        return runs
+
     def test_a_cradle_cap_on_simulated_roller_runs_is_named_with_its_force(self):
         # Roller runs simulated with the cradle capping the force at 3 000 N (wheel 1 kg m^2),
         # against the shipped road runs: the verdict starts with cradle_cap and says the cap.
@@ -305,12 +315,7 @@ class Gap(unittest.TestCase):
             with open(scen, "w") as f:
                 f.write('[scenario]\nbench = "roller"\nseed = 5\n'
                         '[effects]\ncradle_cap_ratio = 0.789\npressure_noise_bar = 0.05\n')
-            roller = []
-            for ramp in ("slow", "medium", "fast"):
-                out = os.path.join(d, f"capped_{ramp}.log")
-                r = run("simulate", scen, "--ramp", ramp, "--out", out)
-                self.assertEqual(r.returncode, 0, r.stderr)
-                roller.append(out)
+            roller = self.simulate(scen, ("slow", "medium", "fast"))
             r = run("gap", "--json", "--report", os.path.join(d, "rep"), *roller)
             self.assertEqual(r.returncode, 0, r.stderr)
             doc = json.loads(r.stdout)
@@ -319,6 +324,32 @@ class Gap(unittest.TestCase):
             self.assertAlmostEqual(cap["params"]["cap_n"], 0.789 * 3800, delta=0.05 * 3000)
             with open(os.path.join(d, "rep", "index.html")) as f:
                 self.assertIn("cradle_cap", f.read())
+
+    def test_a_late_channel_is_read_at_its_delay_where_asked(self):
+        # Generator A's car on the ground (its wheel's inertia out of the force), its pressure
+        # channel 30 ms late: with --realign-delay the runs are conditioned again with the
+        # channel read at the delay named and diagnosed again; the first note says so and what
+        # each reading named, and the delay is the two readings'.
+        with tempfile.TemporaryDirectory() as d:
+            scen = os.path.join(d, "late.toml")
+            with open(os.path.join(ROOT, "sim", "scenarios", "ground_car.toml")) as f:
+                car = f.read().split("[effects]")[0].replace("seed = 2", "seed = 11")
+            with open(scen, "w") as f:
+                f.write(car + '[effects]\nwheel_inertia = false\ntime_offset_s = 0.03\n'
+                        'pressure_noise_bar = 0.05\n')
+            runs = self.simulate(scen, ("100", "150", "250"))
+            docs = {}
+            for flag in ((), ("--realign-delay",)):
+                r = run("gap", "--json", *flag, *runs)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                docs[flag] = json.loads(r.stdout)
+            plain, read = docs[()], docs[("--realign-delay",)]
+            self.assertEqual(plain["verdict"][0], "time_offset", plain["notes"])
+            self.assertEqual(read["verdict"][0], "time_offset", read["notes"])
+            self.assertIn("read that much later", read["notes"][0])
+            self.assertIn("as recorded: " + ", ".join(plain["verdict"]), read["notes"][0])
+            self.assertFalse(any("read that much later" in n for n in plain["notes"]))
+            self.assertAlmostEqual(read["parameters_after"]["dt_s"], 0.03, delta=0.0015)
 
     def test_roller_vs_road_ranks_the_transfer_effects(self):
         roller, road = recorded("roller_2p2bar_*.log"), recorded("ground_2p2bar_*.log")

@@ -6,6 +6,7 @@
 
 #include "core/gap/gap.hpp"
 #include "core/gap/internal.hpp"
+#include "core/gap/realign.hpp"
 #include "core/pipeline/pipeline.hpp"
 #include "sim/referee.hpp"
 #include "sim/simulator.hpp"
@@ -373,4 +374,43 @@ TEST(Gap, AFittedCapNeedsTheKinkOnlyACapLeaves) {
     print(r);
     EXPECT_EQ(std::find(r.verdict.begin(), r.verdict.end(), "cradle_cap"), r.verdict.end()) << seed;
   }
+}
+
+TEST(GapCondition, AChannelReadLaterShowsEachMomentsForceAndEndsThatMuchEarlier) {
+  // A ground stop at 500 Hz whose pressure channel is 80 ms late: it shows at t the line's
+  // pressure at t - 0.08 (a ramp of 200 bar/s from 0.05 s). Read 80 ms later, each sample's force
+  // is its own moment's; the run ends 80 ms before the record (no channel is there to read).
+  std::vector<double> slips;
+  for (int i = 0; i < 300; ++i) slips.push_back(0.05 * i * 2e-3);
+  pipeline::Event e = event_at_slips(can::BenchKind::Ground, slips, 2e-3, 15.0, 3.0, 0, 0);
+  const auto line_bar = [](double t) { return std::max(0.0, 200.0 * (t - 0.05)); };
+  for (auto& s : e.samples) s.pressure_bar = line_bar(static_cast<double>(s.t_ns) * 1e-9 - 0.08);
+  const pipeline::Calibration c = calibration(can::BenchKind::Ground, 60.0);
+  gap::ConditionOptions o;
+  o.max_points = 1000;
+  const gap::Run late = gap::condition("late", e, c, o);
+  o.channel_advance_s = 0.08;
+  const gap::Run read = gap::condition("late", e, c, o);
+  EXPECT_NEAR(late.t_s.back(), 0.598, 0.003);
+  EXPECT_NEAR(read.t_s.back(), 0.518, 0.003);
+  for (std::size_t i = 10; i + 10 < read.t_s.size(); i += 23) {
+    EXPECT_NEAR(read.force_n[i], 60.0 * line_bar(read.t_s[i]), 5.0) << read.t_s[i];
+    EXPECT_NEAR(read.slip[i], 0.05 * read.t_s[i], 2e-4) << read.t_s[i];
+  }
+  // The run keeps what it was conditioned from, the advance among its options.
+  ASSERT_TRUE(read.source);
+  EXPECT_EQ(read.source->options.channel_advance_s, 0.08);
+  EXPECT_EQ(read.source->event.samples.size(), e.samples.size());
+}
+
+TEST(GapCondition, AdvancingAChannelTakesTheSampleNearestEachTimeAndShortensEveryArray) {
+  // Nearest, not a mean of two: a mean would halve the noise the floor is read from.
+  std::vector<double> t_s{0.0, 0.1, 0.2, 0.3, 0.4}, x{0, 10, 20, 40, 80}, other{1, 2, 3, 4, 5};
+  gap::advance_channel(t_s, 0.13, {&x}, {&other});
+  ASSERT_EQ(t_s.size(), 3u);  // 0.3 + 0.13 is past 0.4: read from nothing
+  EXPECT_EQ(other, (std::vector<double>{1, 2, 3}));
+  EXPECT_EQ(x, (std::vector<double>{10, 20, 40}));
+  std::vector<double> t2{0.0, 0.1, 0.2, 0.3}, y{0, 10, 20, 40};
+  gap::advance_channel(t2, 0.17, {&y}, {});
+  EXPECT_EQ(y, (std::vector<double>{20, 40}));
 }
