@@ -101,8 +101,14 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
                        num(r["gap_after_over_noise"], "median"),
                        num(r["gap_after_over_noise"], "p90"));
   }
+  // A row drew pairs where it has their effects (--only may leave a generator none: C draws no
+  // pair with a time offset).
+  const auto drew_pairs = [](const nlohmann::ordered_json& r) {
+    return r["counts"].contains("pairs") && r["counts"]["pairs"].get<int>() > 0 &&
+           r.contains("pair_effects");
+  };
   bool pairs = false;
-  for (const auto& r : rows) pairs |= r["counts"].contains("pairs");
+  for (const auto& r : rows) pairs |= drew_pairs(r);
   if (pairs) {
     out +=
         "\nPairs (two effects in one set; each effect: named / drawn, magnitude error where "
@@ -110,7 +116,7 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
         "effect |\n|---|---|---|---|---|---|\n";
     for (const auto& r : rows) {
       const auto& c = r["counts"];
-      if (!c.contains("pairs")) continue;
+      if (!drew_pairs(r)) continue;
       std::string each;
       for (const auto& [e, v] : r["pair_effects"].items())
         each += fmt::format("{}{} {}/{}, {}", each.empty() ? "" : "; ", e, v["named"].get<int>(),
@@ -122,7 +128,7 @@ std::string results_markdown(const nlohmann::ordered_json& doc) {
     // the effects that were.
     std::string lines;
     for (const auto& r : rows) {
-      if (!r["counts"].contains("pairs")) continue;
+      if (!drew_pairs(r)) continue;
       std::string each;
       for (const auto& [e, v] : r["pair_effects"].items()) {
         const int missed = v["drawn"].get<int>() - v["named"].get<int>();
