@@ -174,10 +174,7 @@ int run(int argc, char** argv) {
       dry_run = w == "1";
     } else if (k == "--tyre-file") {
       const std::string w = v;
-      if (w != "1" && w != "0") {
-        std::cerr << "gap_referee: --tyre-file takes 1 or 0, not '" << w << "'\n";
-        return 64;
-      }
+      if (w != "1" && w != "0") throw Usage(fmt::format("--tyre-file takes 1 or 0, not '{}'", w));
       tyre_file = w == "1";
     } else if (k == "--only") {
       std::stringstream list(v);
@@ -189,10 +186,8 @@ int run(int argc, char** argv) {
       count(st.why, 0);
     else if (k == "--crossed") {
       const std::string w = v;
-      if (w != "1" && w != "yes" && w != "0" && w != "no" && w != "only") {
-        std::cerr << "gap_referee: --crossed takes 1, 0 or only, not '" << w << "'\n";
-        return 64;
-      }
+      if (w != "1" && w != "yes" && w != "0" && w != "no" && w != "only")
+        throw Usage(fmt::format("--crossed takes 1, 0 or only, not '{}'", w));
       crossed = w != "0" && w != "no";
       crossed_only = w == "only";
     } else {

@@ -48,8 +48,6 @@ namespace {
 /// Readings of the channel at most, and the delay left at which they stop.
 constexpr int kRealignReadings = 4;
 constexpr double kRealignTolS = 5e-4;
-/// B, C, D, E lead a fit's parameters.
-constexpr std::size_t kMfParams = 4;
 
 /// The value of e's first parameter in a fit of model, if the model has it.
 std::optional<double> first_param(const Fit& f, const std::vector<Effect>& model, Effect e) {
@@ -95,7 +93,9 @@ std::optional<Report> realigned(const Report& rep, const std::vector<Run>& runs,
       }
       if (k + 1 == kRealignReadings) break;
       const std::vector<Effect> delay{Effect::TimeOffset};
-      const double left = fit_runs(pointers(aligned), delay, start).params[kMfParams];
+      const double left =
+          first_param(fit_runs(pointers(aligned), delay, start), delay, Effect::TimeOffset)
+              .value_or(0.0);
       // Read sample by sample: a residual under half the interval moves no sample.
       if (std::abs(left) < std::max(kRealignTolS, 0.5 * median_interval_s(aligned.front().t_s)))
         break;
